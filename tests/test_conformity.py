@@ -85,13 +85,13 @@ def test_non_binary_four_zones():
 
 
 def test_guard_factor_r_scales_w():
-    r = DecisionRule("guarded", 0.5)
-    d = decide("R", 0.22, 0.1, 2.0, Limits(None, 0.3), r)
-    assert d.guard_band == pytest.approx(0.05) and d.acceptance_upper == pytest.approx(0.25)
+    r = DecisionRule("guarded", 1.5)
+    d = decide("R", 0.14, 0.1, 2.0, Limits(None, 0.3), r)
+    assert d.guard_band == pytest.approx(0.15) and d.acceptance_upper == pytest.approx(0.15)
     assert d.outcome == "pass"
-    assert decide("R", 0.26, 0.1, 2.0, Limits(None, 0.3), r).outcome == "fail"
-    # (0.3 − 0.22)/0.05 = 1.6
-    assert d.false_accept_probability == pytest.approx(norm.cdf(-1.6), rel=1e-9)
+    assert decide("R", 0.16, 0.1, 2.0, Limits(None, 0.3), r).outcome == "fail"
+    # (0.3 − 0.14)/0.05 = 3.2
+    assert d.false_accept_probability == pytest.approx(norm.cdf(-3.2), rel=1e-9)
 
 
 def test_guard_band_closing_the_interval_passes_nothing():

@@ -49,12 +49,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 
 from gonio.errors import GonioError
-from gonio.formats.lab import (DECISION_RULES, check_interval, check_one_limit_per_item,
-                              check_symmetric)
+from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interval,
+                              check_one_limit_per_item, check_symmetric)
 from gonio.result.model import Conformity
-from gonio.result.statement import K_SOURCE_MAX_ABS, stated_nu
+from gonio.result.statement import (decimals_for_sig, given_text, is_magnitude_statement,
+                                    item_statement, stated_nu)
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -64,6 +66,8 @@ __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_
 #: ``limits_from`` of an item decided on a specification's default tolerance
 #: (``SPEC.default_limits``), where the laboratory file gives no limit for it.
 DEFAULT_LIMITS_ORIGIN = "specification default"
+
+_SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
 RULES: tuple[str, ...] = DECISION_RULES
@@ -75,7 +79,8 @@ OUTCOMES: tuple[str, ...] = ("pass", "conditional pass", "conditional fail", "fa
 class DecisionRule:
     """A decision rule: ``kind`` in :data:`RULES`, guard band w = ``guard_factor`` · U.
 
-    ``guard_factor`` is ignored by ``simple`` (w = 0).
+    ``guard_factor`` is ignored by ``simple`` (w = 0); a rule with a guard band needs r ≥ 1
+    (:func:`gonio.formats.lab.check_guard_factor`).
     """
 
     kind: str = "simple"
@@ -88,6 +93,10 @@ class DecisionRule:
         if not (math.isfinite(self.guard_factor) and self.guard_factor >= 0):
             raise GonioError(f"expected a finite number ≥ 0, got {self.guard_factor!r}",
                              key="decision_rule.guard_band_factor")
+        try:
+            check_guard_factor(self.kind, self.guard_factor)
+        except GonioError as exc:
+            raise GonioError(exc.message, key="decision_rule.guard_band_factor") from None
 
     def guard_band(self, U: float) -> float:
         """w: 0 for simple acceptance, r·U otherwise (ILAC-G8 4.2.2)."""
@@ -325,19 +334,26 @@ NOT_NORMAL_PROBABILITY_MODEL = ("not given: its 95 % interval ({source}) is not 
 
 def extreme_of_magnitudes(key: str, it, declared=()) -> bool:
     """Whether item ``it`` (key ``key``) is an extreme of magnitudes max_i |x_i| (the optical
-    draft's E, 7.4: E = ± max|E_i|): its specification declares it so (``declared``: its
-    ``Specification.magnitude_extremes``), or it is stated by the 95 % interval of such an
-    extreme (``k_source`` :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`). Such a value is
-    compared with a symmetric limit only (:func:`gonio.formats.lab.check_symmetric`): the
+    draft's E, 7.4: E = ± max|E_i|; the rate gyros' largest magnitudes): its specification
+    declares it so (``declared``: its ``Specification.magnitude_extremes``), or its statement
+    is of that kind (``k_source`` one of
+    :data:`~gonio.result.statement.MAGNITUDE_K_SOURCES`,
+    :func:`~gonio.result.statement.is_magnitude_statement`), whichever specification computed
+    it. Such a value is compared with a symmetric limit only
+    (:func:`gonio.formats.lab.check_symmetric`) and accepted on its upper end only: the
     declaration also covers the draft's own max|E_i| ± U (k given), which carries no marker.
 
-    >>> from gonio.result.model import Item
+    >>> from gonio.result.model import Item, Uncertainty
     >>> it = Item("E", "E", "7.4", "″", 0.4)
     >>> extreme_of_magnitudes("E", it, ("E",)), extreme_of_magnitudes("E", it)
     (True, False)
+    >>> from gonio.result.statement import K_SOURCE_MAX_MAGNITUDE
+    >>> it.uncertainty = Uncertainty([], 0.05, 0.1, None, None, None, 0.95,
+    ...                              K_SOURCE_MAX_MAGNITUDE, (0.3, 0.5))
+    >>> extreme_of_magnitudes("B_g", it)
+    True
     """
-    unc = it.uncertainty
-    return bool(key in declared or (unc is not None and unc.k_source == K_SOURCE_MAX_ABS))
+    return bool(key in declared or is_magnitude_statement(it.uncertainty))
 
 
 def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
@@ -355,104 +371,211 @@ def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
     check_symmetric(key, bounds.lower, bounds.upper, key=where)
 
 
-def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> Conformity:
+#: ``probability_model`` of an item whose U has a coverage factor from a non-normal combined
+#: distribution (JCGM 101 convolution, :func:`decide_items`): N(y, U/k) is not the
+#: distribution whose 95 % half-width is U, so no probability is given; the outcome is
+#: decided on y against the acceptance interval.
+NON_NORMAL_K_PROBABILITY_MODEL = ("not given: its k = {k} is the 95 % coverage factor of a "
+                                  "non-normal combined distribution ({source}), not of "
+                                  "N(y, U/k); the outcome is decided on y ± U")
+
+#: ``k_source`` of a k that is the 95 % coverage factor of a non-normal combined distribution
+#: (the optical draft's JCGM 101 convolution of its budget, ``K_SOURCE_COMBINED`` there): the
+#: normal model N(y, (U/k)²) of JCGM 106 7.3 does not hold for it (:func:`_decided`).
+NON_NORMAL_K_SOURCES: tuple[str, ...] = ("jcgm101-convolution",)
+
+
+def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
+             magnitude: bool) -> Conformity:
     """The decision of a measured item with U (:func:`decide_items`)."""
     unc = it.uncertainty
-    by_interval = unc.k is None and unc.interval is not None
-    # ν as stated (integer part, gonio.result.statement.stated_nu): the ν the χ² interval of
-    # the statement was computed from, so interval and decision agree
-    chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None
-               and unc.nu_eff is not None and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
-               and (unc.k is not None or unc.k_source == "chi-square") else None)
-    chi2_nu = chi2_nu if chi2_nu is not None and it.value > 0 else None
-    u_normal = float(unc.u_c) if unc.k is None and unc.u_c is not None and unc.u_c > 0 \
-        else None
-    no_p = None
-    if by_interval and chi2_nu is None:
-        no_p = (MAX_ABS_PROBABILITY_MODEL if unc.k_source == K_SOURCE_MAX_ABS
-                else NOT_NORMAL_PROBABILITY_MODEL.format(source=unc.k_source or "its own"))
-    # an item stated by its interval alone: the band at a lower limit is the interval's reach
-    # below the value (its upper reach is U). An interval of the extreme of magnitudes
-    # max_i |x_i| (E, 7.4) is decided at that extreme (interval[1] - U): "pass" only where
-    # the whole interval lies inside the limits
-    y = (float(unc.interval[1]) - float(unc.U)
-         if by_interval and unc.k_source == K_SOURCE_MAX_ABS else float(it.value))
-    U_lower = (y - float(unc.interval[0])
-               if by_interval and math.isfinite(float(unc.interval[0])) else None)
-    c = replace(decide(key, y, float(unc.U), None if unc.k is None else float(unc.k), bounds,
-                       rule, chi2_nu=chi2_nu, u=u_normal, U_lower=U_lower,
-                       no_probability=no_p), limits_from=origin)
-    if by_interval and rule.kind != "simple":
-        c = _on_interval(c, bounds, rule, float(unc.U),
-                         float(unc.U) if U_lower is None else max(U_lower, 0.0))
-        if unc.k_source == K_SOURCE_MAX_ABS:
-            # the interval of max_i |x_i| lies at or above 0, inside any −M of its symmetric
-            # limit: only its upper end is accepted or not (no lower acceptance end printed)
-            c = replace(c, acceptance_lower=None, guard_band_lower=None)
-        # decided on the interval's ends, the quantity the acceptance is stated on (one rule
-        # for decision and print, ILAC-G8 4.2.2): a value outside its own interval (a
-        # bias-corrected y below a non-negative item's interval) is not decided on y
-        lo_end = (float(unc.interval[0]) if U_lower is not None
-                  else y - float(unc.U))
-        c = _decided_on_ends(c, lo_end, y + float(unc.U), y, bounds)
+    if unc.k is None and unc.interval is not None:
+        c = _decided_interval(key, it, bounds, rule, magnitude)
+    else:
+        no_p = None
+        if unc.k_source in NON_NORMAL_K_SOURCES:
+            no_p = NON_NORMAL_K_PROBABILITY_MODEL.format(k=f"{float(unc.k):.3g}",
+                                                         source=unc.k_source)
+        # ν as stated (integer part, stated_nu): the ν of the χ² interval beside the value
+        chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None and no_p is None
+                   and unc.nu_eff is not None and math.isfinite(unc.nu_eff)
+                   and unc.nu_eff > 0 and it.value > 0 else None)
+        c = decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
+                   chi2_nu=chi2_nu, no_probability=no_p)
+        c = replace(c, **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds,
+                                           decimals_for_sig(float(unc.U), 2)))
+    c = replace(c, limits_from=origin)
     lo, hi = c.acceptance_lower, c.acceptance_upper
     return replace(c, acceptance_empty=bool(
         (lo is not None and hi is not None and lo > hi)
         or (it.nonnegative and hi is not None and hi < 0)))
 
 
-def _decided_on_ends(c: Conformity, lo_end: float, hi_end: float, y: float,
-                     bounds: Limits) -> Conformity:
-    """The outcome of an item stated by its interval [lo_end, hi_end] alone, on the
-    acceptance interval :func:`_on_interval` states for those ends: "pass" where both ends
-    lie inside it. Otherwise the outcome of :func:`decide` stands (non-binary: "conditional"
-    by the value against the tolerance), except that a "pass" of the value whose interval's
-    ends are not accepted is "conditional pass" (non-binary, value inside the tolerance) or
-    "fail".
+def _acceptance_texts(a_lo: float | None, a_hi: float | None, bounds: Limits,
+                      decimals: int) -> dict:
+    """The acceptance limits as printed, decided once here (the renderer prints these
+    texts): a limit equal to the tolerance limit as given; any other at ``decimals`` places
+    rounded inward (upper end down, lower end up), so that a stated number on that decimal
+    grid lies inside the printed acceptance interval exactly when it lies inside the decided
+    one (:func:`stated_interval_of` states interval ends on that grid).
 
-    >>> c = decide("C_g", -1.58e-5, 2.98e-5, None, Limits(-1.5e-5, 1.5e-5),
-    ...            DecisionRule("guarded"), U_lower=0.0, no_probability="n/a")
-    >>> c = _on_interval(c, Limits(-1.5e-5, 1.5e-5), DecisionRule("guarded"), 2.98e-5, 0.0)
-    >>> c.outcome, _decided_on_ends(c, 0.0, 1.4e-5, -1.58e-5, Limits(-1.5e-5, 1.5e-5)).outcome
-    ('fail', 'pass')
+    >>> _acceptance_texts(None, 0.4709, Limits(None, 0.5), 2)
+    {'acceptance_lower_text': None, 'acceptance_upper_text': '0.47'}
+    >>> _acceptance_texts(-0.5, 0.5, Limits(-0.5, 0.5), 2)["acceptance_upper_text"]
+    '0.5'
     """
-    lo, hi = c.acceptance_lower, c.acceptance_upper
-    if (lo is None or lo_end >= lo) and (hi is None or hi_end <= hi):
-        outcome = "pass"
-    elif c.outcome == "pass":
-        outcome = ("conditional pass" if c.rule == "non-binary"
-                   and _inside(y, bounds.lower, bounds.upper) else "fail")
+    def text(v, lim, rounding):
+        if v is None:
+            return None
+        if v == lim:
+            return given_text(v)
+        return _plain(Decimal(repr(float(v))).quantize(Decimal(1).scaleb(-decimals),
+                                                        rounding=rounding), keep=True)
+    return {"acceptance_lower_text": text(a_lo, bounds.lower, ROUND_CEILING),
+            "acceptance_upper_text": text(a_hi, bounds.upper, ROUND_FLOOR)}
+
+
+def stated_interval_of(it) -> tuple[Decimal, Decimal, Decimal, int, tuple[str, str, str]]:
+    """The interval of an item stated by its 95 % interval alone, as its statement prints it
+    (:func:`gonio.result.statement.item_statement`: lower end rounded down, upper end up, at
+    the statement's decimal place), and the value as stated: (value, lower end, upper end,
+    decimal place, the three as printed). A non-negative quantity whose estimate fell below zero is stated by its
+    upper bound alone ("the estimate fell below zero", the interval [0, upper]): its stated
+    value is the interval's lower end, 0, the least value the statement admits.
+
+    The decision is taken on these numbers (what the certificate states), never on the
+    unrounded ends or an unprinted bias-corrected estimate, so the printed interval and the
+    printed acceptance limit never contradict the outcome.
+
+    >>> from gonio.result.model import Item, Uncertainty
+    >>> it = Item("C_g", "C_g", "7.7", "%", -1.58e-5, nonnegative=True,
+    ...           uncertainty=Uncertainty([], 1e-6, 2.98e-5, None, None, None, 0.95, "belt",
+    ...                                   (0.0, 1.4e-5)))
+    >>> [str(x) for x in stated_interval_of(it)[:3]], stated_interval_of(it)[4]
+    (['0.000000', '0.000000', '0.000014'], ('0', '0', '0.000014'))
+    """
+    st = item_statement(it)
+    scale = Decimal(1).scaleb(st.exponent)
+    lo, hi = (Decimal(x.replace("−", "-")) * scale for x in st.interval)
+    value = lo if st.below_zero else Decimal(st.value.replace("−", "-")) * scale
+    ends = tuple("0" if x == 0 else t for x, t in zip((lo, hi), st.interval_ends))
+    return value, lo, hi, int(st.decimals), (ends[0] if st.below_zero else st.value_text,
+                                              ends[0], ends[1])
+
+
+def interval_guard_U(lo: Decimal, hi: Decimal) -> Decimal:
+    """U of the guard band w = r·U of an item stated by its 95 % interval [lo, hi] alone: the
+    interval's half-width (hi − lo)/2.
+
+    Such an item has no k (its distribution is not symmetric about its estimate), so the only
+    U its statement gives is the one that states the same interval as centre ± U:
+    [lo, hi] = (lo + hi)/2 ± (hi − lo)/2. ILAC-G8:09/2019 4.2.2 sets w = r·U with U the
+    expanded uncertainty of the result as stated, and JCGM 106:2012 8.3.2 the acceptance
+    interval [T_L + w, T_U − w] for the stated result: applied to that centre, r = 1 accepts
+    exactly when the whole stated interval lies within the tolerance, and r > 1 moves each
+    end in by (r − 1)·U. A one-sided bound [0, b] of a non-negative quantity is the same
+    rule with U = b/2. Being a function of the two printed ends alone, the same printed
+    interval always gets the same decision (an unprinted bias-corrected estimate no longer
+    enters).
+
+    >>> interval_guard_U(Decimal("0.066"), Decimal("0.205"))
+    Decimal('0.0695')
+    """
+    return (hi - lo) / 2
+
+
+def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
+                      magnitude: bool) -> Conformity:
+    """The decision of an item stated by its 95 % interval alone, on what its statement
+    prints (:func:`stated_interval_of`): the value v, the interval [lo, hi], U its half-width
+    (:func:`interval_guard_U`).
+
+    * simple (ILAC-G8 4.2.1, w = 0): pass when v lies within the tolerance;
+    * guarded (4.2.2, w = r·U, r ≥ 1): pass when hi ≤ T_U − (r − 1)·U and lo ≥ T_L +
+      (r − 1)·U (the centre within [T_L + w, T_U − w]; r = 1: the interval within the
+      tolerance);
+    * non-binary (4.2.3): pass as guarded; else conditional pass when v lies within the
+      tolerance; else conditional fail when the interval, widened by (r − 1)·U, still reaches
+      into the tolerance (the centre outside by at most w); else fail.
+
+    An extreme of magnitudes (``magnitude``: v, lo, hi ≥ 0 against a symmetric limit ±M) is
+    accepted on its upper end only. A probability is given only for the χ² interval of a
+    standard deviation (its χ² model, from the estimate s); elsewhere none
+    (:data:`NOT_NORMAL_PROBABILITY_MODEL`), and an item accepted under a guard band (r ≥ 1)
+    states the bound its rule implies, ``false_accept_bound`` = 1 − p: its stated interval's
+    upper end lies within the limit, and the measurand lies above that end with probability
+    at most 1 − p (5 % for a one-sided 95 % bound, as the χ² limits and E's extreme are;
+    an item stated y ± U with a normal k = 2 at r = 1 has at most 2.5 %).
+    """
+    unc = it.uncertainty
+    v, lo, hi, dec, printed = stated_interval_of(it)
+    U = interval_guard_U(lo, hi)
+    r = Decimal(repr(float(rule.guard_factor)))
+    T_L = None if bounds.lower is None or magnitude else Decimal(repr(float(bounds.lower)))
+    T_U = None if bounds.upper is None else Decimal(repr(float(bounds.upper)))
+    in_tol = (T_L is None or v >= T_L) and (T_U is None or v <= T_U)
+    if rule.kind == "simple":
+        a_lo, a_hi, w = T_L, T_U, Decimal(0)
+        outcome = "pass" if in_tol else "fail"
     else:
-        outcome = c.outcome
-    if outcome == c.outcome:
-        return c
+        w = r * U
+        a_lo = None if T_L is None else T_L + (r - 1) * U
+        a_hi = None if T_U is None else T_U - (r - 1) * U
+        in_acc = (a_lo is None or lo >= a_lo) and (a_hi is None or hi <= a_hi)
+        if in_acc:
+            outcome = "pass"
+        elif rule.kind == "guarded":
+            outcome = "fail"
+        elif in_tol:
+            outcome = "conditional pass"
+        else:
+            reach = ((T_U is None or lo - (r - 1) * U <= T_U)
+                     and (T_L is None or hi + (r - 1) * U >= T_L))
+            outcome = "conditional fail" if reach else "fail"
+    chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
+        and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
+    if chi2:
+        nu = stated_nu(unc.nu_eff)
+        p_c = conformance_probability_chi2(float(it.value), nu, bounds.lower, bounds.upper)
+        model = f"chi-square, nu = {nu:g}"
+    else:
+        p_c = None
+        model = (MAX_ABS_PROBABILITY_MODEL if magnitude else
+                 NOT_NORMAL_PROBABILITY_MODEL.format(source=unc.k_source or "its own"))
     accepted = outcome in ("pass", "conditional pass")
-    p_c = c.conformance_probability
-    return replace(c, outcome=outcome, accepted=accepted,
-                   false_accept_probability=(1.0 - p_c) if accepted and p_c is not None
-                   else None,
-                   false_reject_probability=p_c if not accepted else None)
+    p = float(unc.coverage_probability or 0.95)
+    bound = (round(1.0 - p, 12) if outcome == "pass" and rule.kind != "simple"
+             and p_c is None else None)
+    f = (lambda x: None if x is None else float(x))  # noqa: E731
+    texts = _acceptance_texts(f(a_lo), f(a_hi), bounds, dec)
+    return Conformity(
+        item=key, value=float(v), U=float(U), k=None, lower=bounds.lower, upper=bounds.upper,
+        rule=rule.kind, guard_band=float(w), acceptance_lower=f(a_lo),
+        acceptance_upper=f(a_hi), outcome=outcome, accepted=accepted,
+        conformance_probability=p_c,
+        false_accept_probability=(1.0 - p_c) if accepted and p_c is not None else None,
+        false_reject_probability=p_c if not accepted else None, source=bounds.source,
+        guard_factor=float(rule.guard_factor), probability_model=model,
+        acceptance_of="value" if rule.kind == "simple" else "interval",
+        stated_interval=printed[1:], stated_value=printed[0],
+        false_accept_bound=bound, **texts)
 
 
-def _on_interval(c: Conformity, bounds: Limits, rule: DecisionRule, U: float,
-                 U_lower: float) -> Conformity:
-    """The acceptance interval of an item stated by its 95 % interval [y − U_L, y + U] and
-    decided under a guard band (w = r·U above, r·U_L below), restated on the interval's ends:
-    y ≤ T_U − r·U is "the interval's upper end ≤ T_U − (r − 1)·U" (T_U itself at r = 1,
-    ILAC-G8 4.2.2: the interval lies inside the tolerance), y ≥ T_L + r·U_L is "its lower end
-    ≥ T_L + (r − 1)·U_L". The same decision, stated on the quantity the certificate prints:
-    never "value ≤ T_U − U", a negative limit where U exceeds T_U for a non-negative item.
+def _plain(d: Decimal, keep: bool = False) -> str:
+    """A stated Decimal as text: plain where its exponent is moderate, else as the
+    certificate's power of ten (mantissa digits kept, never rounded again); ``keep`` keeps
+    trailing zeros (the decimal place it was rounded at).
 
-    >>> c = decide("K_l", 5.0e-5, 1.2e-4, None, Limits(None, 1e-4), DecisionRule("guarded"),
-    ...            u=8e-5, U_lower=5e-5)
-    >>> c.acceptance_upper < 0, _on_interval(c, Limits(None, 1e-4), DecisionRule("guarded"),
-    ...                                      1.2e-4, 5e-5).acceptance_upper
-    (True, 0.0001)
+    >>> _plain(Decimal("0.0000140")), _plain(Decimal("0.0000140"), keep=True)
+    ('0.000014', '0.0000140')
+    >>> _plain(Decimal("1.45E-9"))
+    '1.45×10⁻⁹'
     """
-    r = rule.guard_factor
-    lo = None if bounds.lower is None else bounds.lower + (r - 1.0) * U_lower
-    hi = None if bounds.upper is None else bounds.upper - (r - 1.0) * U
-    return replace(c, acceptance_lower=lo, acceptance_upper=hi, acceptance_of="interval")
+    d = d if keep else d.normalize()
+    if d == 0 or -7 <= d.adjusted() < 15:
+        return format(d, "f")
+    e = d.adjusted()
+    return f"{format(d.scaleb(-e), 'f')}×10{str(e).translate(_SUP)}"
 
 
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
@@ -469,8 +592,8 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
     outcome and the ``reason``. An extreme of magnitudes (:func:`extreme_of_magnitudes`:
     ``magnitude_extremes``, the keys its specification declares so, or the marker of its
     statement) takes a symmetric limit only (:func:`check_symmetric_limit`). An item stated by its
-    95 % interval alone is decided on that interval; its acceptance interval bounds the
-    interval's ends under a guard band (:func:`_on_interval`), and a probability is given only
+    95 % interval alone is decided on that interval as stated (:func:`_decided_interval`); its
+    acceptance bounds the interval's ends under a guard band, and a probability is given only
     where the interval is the χ² one of a standard deviation
     (:data:`NOT_NORMAL_PROBABILITY_MODEL`). Returns the decisions in the order of ``limits``.
 
@@ -494,7 +617,8 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
                              f"{', '.join(result.items)})", key=f"{where}[{i}].item")
         it = result.items[key]
         bounds = limits_of(lim)
-        if extreme_of_magnitudes(key, it, magnitude_extremes):
+        magnitude = extreme_of_magnitudes(key, it, magnitude_extremes)
+        if magnitude:
             check_symmetric_limit(key, bounds, f"{where}[{i}]")
         unc = it.uncertainty
         if not it.measured or it.value is None:
@@ -503,7 +627,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
               or (unc.k is None and unc.interval is None)):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
-            c = _decided(key, it, bounds, rule, origin)
+            c = _decided(key, it, bounds, rule, origin, magnitude)
         it.conformity = c
         out.append(c)
     return out

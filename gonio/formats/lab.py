@@ -13,6 +13,7 @@ Contents
 :func:`check_interval`           a limit's lower end below its upper end, one end at least
 :func:`check_symmetric`          an extreme of magnitudes takes a symmetric limit only
 :func:`check_magnitude_extremes` every limit of such an item symmetric, before any work
+:func:`check_guard_factor`       a guard band's factor r ≥ 1
 ===============================  ==========================================================
 
 The certificate renders what this file holds (ISO/IEC 17025 7.8.2.1, 7.8.4, 7.8.6); the
@@ -31,7 +32,7 @@ from gonio.formats.toml import (Field, check_text_fields, non_negative, positive
 
 __all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "LOCATIONS", "load_lab",
            "naming_lab_file", "check_one_limit_per_item", "check_interval", "check_symmetric",
-           "check_magnitude_extremes"]
+           "check_magnitude_extremes", "check_guard_factor"]
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``; ILAC-G8:09/2019
 #: clause 4, :mod:`gonio.analysis.conformity`).
@@ -161,6 +162,28 @@ def check_interval(lower: float | None, upper: float | None) -> None:
         raise GonioError(f"lower limit {lower} is not below upper limit {upper}")
 
 
+def check_guard_factor(rule: str | None, factor: float | None) -> None:
+    """A guard band factor r (w = r·U) of a rule with a guard band ("guarded",
+    "non-binary") is at least 1. ILAC-G8:09/2019 4.2.2 guards acceptance with w > 0 inside
+    the tolerance; an item stated by its 95 % interval alone is accepted on the interval's
+    ends (:func:`gonio.analysis.conformity.interval_guard_U`), and r < 1 would accept an
+    interval reaching past the limit by (1 − r)·U (an acceptance limit outside the
+    tolerance). r = 0 is simple acceptance: ``rule = "simple"`` says so. None: the default,
+    1.
+
+    >>> check_guard_factor("guarded", 1.0), check_guard_factor("simple", 0.0)
+    (None, None)
+    >>> check_guard_factor("guarded", 0.5)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: guarded needs guard_band_factor r ≥ 1 (w = r·U, ILAC-G8:09/2019 4.2.2; r < 1 would accept a 95 % interval reaching past the limit; r = 0 is rule = "simple"); got 0.5
+    """
+    if rule in ("guarded", "non-binary") and factor is not None and not factor >= 1.0:
+        raise GonioError(f"{rule} needs guard_band_factor r ≥ 1 (w = r·U, ILAC-G8:09/2019 "
+                         "4.2.2; r < 1 would accept a 95 % interval reaching past the limit; "
+                         f"r = 0 is rule = \"simple\"); got {factor:g}")
+
+
 def check_one_limit_per_item(limits, where: str = "specification_limits", *,
                              file=None) -> None:
     """One limit per item: a second entry for the same item is an error naming both, never
@@ -259,6 +282,13 @@ def load_lab(path: str | Path) -> dict:
                 check_interval(lim["lower"], lim["upper"])
         except GonioError as exc:
             raise GonioError(exc.message, file=path, key=key) from None
+    if lab["decision_rule"] is not None:
+        try:
+            check_guard_factor(lab["decision_rule"].get("rule"),
+                               lab["decision_rule"].get("guard_band_factor"))
+        except GonioError as exc:
+            raise GonioError(exc.message, file=path,
+                             key="decision_rule.guard_band_factor") from None
     if limits and lab["decision_rule"] is None:
         raise GonioError("specification limits need the decision rule agreed "
                          "([decision_rule] rule = simple | guarded | non-binary)", file=path,

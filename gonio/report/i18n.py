@@ -282,14 +282,23 @@ LABELS: dict[str, dict[str, str]] = {
                           "判定依据该区间作出。"},
     "c_interval_band_note": {
         "en": "Guard band of an item stated by its 95 % interval alone ({items}): U in w = r·U "
-              "is that interval's own reach above the value (its upper end − the value; below "
-              "it, the value − its lower end), not an uncertainty stated beside it, and w is "
-              "applied to the interval's ends (at r = 1 the interval lies within the limits).",
-        "zh": "以 95 % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为该区间自身在值之上的"
-              "伸展（上端 − 值；值之下为 值 − 下端），不是其旁给出的不确定度；w 施加于区间的端点"
-              "（r = 1 时区间位于规定限之内）。"},
-    "c_interval_band_item": {"en": "{name}: U = {U} {unit} = {hi} {unit} − {y} {unit}",
-                             "zh": "{name}：U = {U} {unit} = {hi} {unit} − {y} {unit}"},
+              "is the half-width of that interval as stated, (upper end − lower end)/2 "
+              "(the interval is its centre ± U; not an uncertainty stated beside it), and w "
+              "is applied to the interval's ends: each end is moved in by (r − 1)·U, so at "
+              "r = 1 the interval lies within the limits. Such an item is decided on the "
+              "interval as printed; an accepted one lies above its interval's upper end with "
+              "a probability of at most 1 − p = 5 % (the column “≤ 5 %”; a one-sided 95 % "
+              "bound reaches that, an item stated y ± U with k for 95 % has at most 2.5 % at "
+              "r = 1).",
+        "zh": "以 95 % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为所给区间的半宽，"
+              "（上端 − 下端）/2（区间即 中点 ± U；不是其旁给出的不确定度）；w 施加于区间的端点："
+              "两端各向内移 (r − 1)·U，r = 1 时区间位于规定限之内。此类项目按所印区间判定；"
+              "判为合格者其被测量高于区间上端的概率至多为 1 − p = 5 %（表中“≤ 5 %”；单侧 95 % "
+              "上限可达此值，以 y ± U（95 % 的 k）表述的项目在 r = 1 时至多 2.5 %）。"},
+    "c_interval_band_item": {"en": "{name}: U = ({hi} − {lo})/2 {unit} = {U} {unit}, w = {w} "
+                                   "{unit}",
+                             "zh": "{name}：U = ({hi} − {lo})/2 {unit} = {U} {unit}，w = {w} "
+                                   "{unit}"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "pass": {"en": "pass", "zh": "合格"},
     "fail": {"en": "fail", "zh": "不合格"},

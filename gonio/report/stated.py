@@ -27,7 +27,7 @@ from typing import Any
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
 from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX, decimals_for_sig,
-                                    round_half_up)
+                                    given_text, round_half_up)
 
 
 class NoBreakText(str):
@@ -64,19 +64,6 @@ def num(res: dict, src: str, rule: str, U: float | None = None) -> Num | str:
 
 
 # --------------------------------------------------------------------------- conformity
-
-
-def given_text(v: float) -> str:
-    """A specification limit as the laboratory gave it (no rounding: it is not measured).
-
-    >>> given_text(0.3), given_text(-0.5), given_text(1e-05), given_text(-2.5e6)
-    ('0.3', '-0.5', '1×10⁻⁵', '-2.5×10⁶')
-    """
-    text = f"{float(v):g}"
-    if "e" not in text:
-        return text
-    mant, exp = text.split("e")           # the certificate's power-of-ten form, never "1e-05"
-    return f"{mant}×10{str(int(exp)).translate(str.maketrans('-0123456789', '⁻⁰¹²³⁴⁵⁶⁷⁸⁹'))}"
 
 
 def interval_text(lo, hi, f) -> str:
@@ -127,8 +114,13 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
     lims = {x for x in (g("lower"), g("upper")) if x is not None}
     al, au = g("acceptance_lower"), g("acceptance_upper")
 
+    texts = {id(x): t for x, t in ((al, g("acceptance_lower_text")),
+                                    (au, g("acceptance_upper_text"))) if x is not None and t}
+
     def f(v):
-        # an acceptance limit rounded inward (upper down, lower up) to U's places: the printed
+        if id(v) in texts:                  # decided once in the Result: printed as stored
+            return texts[id(v)]
+        # (an older result) an acceptance limit rounded inward (upper down, lower up) to U's places: the printed
         # acceptance interval is never wider than the decided one, so a printed end that
         # meets the printed limit was accepted (a half-up 0.4556 printed 0.456 beside an
         # interval end 0.4558 printed 0.456 and a "fail")
@@ -152,7 +144,9 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
     model = g("probability_model") or ""
     return {"limits": interval_text(g("lower"), g("upper"), given_text),
             "acceptance": acc, "outcome": L[g("outcome")] if g("outcome") else "—",
-            "pfa": display("sig2", 100.0 * pfa) + " %" if pfa is not None else "—",
+            "pfa": (display("sig2", 100.0 * pfa) + " %" if pfa is not None
+                    else "≤ " + display("sig2", 100.0 * g("false_accept_bound")) + " %"
+                    if g("false_accept_bound") is not None else "—"),
             "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else "",
             "no_p": model if g("outcome") and g("conformance_probability") is None
             and model.startswith("not given") else ""}
@@ -247,26 +241,41 @@ def no_probability_note(decided, L: dict, name_of) -> str:
 def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
     """The note under a decision rule with a guard band naming, for each item decided on its
     95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the U of
-    its guard band w = r·U: the interval's reach above the decided value (conformity ``U``,
-    its upper end ``value + U``, :func:`gonio.analysis.conformity.decide_items`), so that no
+    its guard band w = r·U: the half-width of the interval as stated,
+    (upper end − lower end)/2 (:func:`gonio.analysis.conformity.interval_guard_U`), printed
+    exactly from the stated ends the Result stores (``stated_interval``, ``U``), so that no
     reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
     it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
     the unit as printed."""
     rows = []
     for key, c in decided:
         if not c or c.get("acceptance_of") != "interval" or c.get("rule") == "simple" \
-                or not c.get("outcome") or c.get("U") is None or c.get("value") is None:
+                or not c.get("outcome") or c.get("U") is None or not c.get("stated_interval"):
             continue
-        y, U = float(c["value"]), float(c["U"])
-        # a value below zero (a bias-corrected range) in brackets: "3.9 − (−1.6)"
-        yt = display("sig2", y) if y >= 0 else f"({display('sig2', y)})"
+        lo, hi = c["stated_interval"]
         rows.append(L.get("c_interval_band_item", "{name}: U = {U} {unit}").format(
-            name=name_of(key), unit=unit_of(key), U=display("sig2", U),
-            hi=display("sig2", y + U), y=yt).replace("  ", " "))
+            name=name_of(key), unit=unit_of(key), U=_half_text(lo, hi), hi=hi, lo=lo,
+            w=_half_text(lo, hi, c.get("guard_factor") or 1.0)).replace("  ", " "))
     if not rows or "c_interval_band_note" not in L:
         return ""
     sep = "；" if L["c_interval_band_note"].startswith("以") else "; "
     return L["c_interval_band_note"].format(items=sep.join(rows))
+
+
+def _half_text(lo: str, hi: str, r: float = 1.0) -> str:
+    """r·(hi − lo)/2 of two stated ends (texts, maybe "×10⁻⁵"), exactly, as text.
+
+    >>> _half_text("0.066", "0.205"), _half_text("0", "1.4×10⁻⁵", 2.0)
+    ('0.0695', '0.000014')
+    """
+    from decimal import Decimal
+    sub = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+
+    def dec(t: str) -> Decimal:
+        m, _, e = t.replace("−", "-").partition("×10")
+        return Decimal(m) * Decimal(1).scaleb(int(e.translate(sub)) if e else 0)
+    h = (dec(hi) - dec(lo)) / 2 * Decimal(repr(float(r)))
+    return given_text(float(h)) if h and abs(h.adjusted()) > 6 else format(h.normalize(), "f")
 
 
 def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:

@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from gonio.result.model import Uncertainty
+from gonio.result.statement import K_SOURCE_MAX_MAGNITUDE as _K_SOURCE_MAX_MAGNITUDE
 from gonio.result.statement import stated_gum
 from uncertainty import monte_carlo, propagate, validate_gum
 
@@ -114,8 +115,8 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
 
 
 #: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of
-#: magnitudes (:func:`max_magnitude_statement`).
-K_SOURCE_MAX_MAGNITUDE = "interval of max|x_i| (uncertainty.extreme.max_abs_interval)"
+#: magnitudes (:func:`max_magnitude_statement`; defined with the statement rule).
+K_SOURCE_MAX_MAGNITUDE = _K_SOURCE_MAX_MAGNITUDE
 
 
 def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],

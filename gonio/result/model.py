@@ -194,6 +194,19 @@ class Conformity:
     #: an item stated by an interval that is not symmetric about its value is guarded by its
     #: own reach below the value there (r·U_L); None where the two bands are one
     guard_band_lower: float | None = None
+    #: the acceptance limits as printed, decided once (a limit as given, else rounded inward
+    #: at the decimal place of what is compared with it), or None (open, or an older result)
+    acceptance_lower_text: str | None = None
+    acceptance_upper_text: str | None = None
+    #: an item stated by its 95 % interval alone: the interval and the value as its
+    #: statement prints them (what the decision is taken on), else None
+    stated_interval: tuple[str, str] | None = None
+    stated_value: str | None = None
+    #: where no probability is computed (an interval item accepted under a guard band,
+    #: r ≥ 1): the bound on the specific false-accept probability the rule implies, 1 − p of
+    #: its stated interval (the measurand lies above the interval's upper end with at most
+    #: that probability), else None
+    false_accept_bound: float | None = None
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

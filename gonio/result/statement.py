@@ -371,6 +371,19 @@ def signed_text(x: float, decimals: int = 2) -> str:
     return text.lstrip("+-") if float(text) == 0.0 else ("" if text.startswith("-") else "+") + text
 
 
+def given_text(v: float) -> str:
+    """A specification limit as the laboratory gave it (no rounding: it is not measured).
+
+    >>> given_text(0.3), given_text(-0.5), given_text(1e-05), given_text(-2.5e6)
+    ('0.3', '-0.5', '1×10⁻⁵', '-2.5×10⁶')
+    """
+    text = f"{float(v):g}"
+    if "e" not in text:
+        return text
+    mant, exp = text.split("e")           # the certificate's power-of-ten form, never "1e-05"
+    return f"{mant}×10{str(int(exp)).translate(str.maketrans('-0123456789', '⁻⁰¹²³⁴⁵⁶⁷⁸⁹'))}"
+
+
 def dsi_unit(unit: str | None) -> tuple[str, float] | None:
     """(D-SI unit, factor on value and U) of a results.json unit, or None if it has none.
 
@@ -687,6 +700,27 @@ K_SOURCE_MAX_ABS = "max-abs-interval"
 #: of its maximum removed: its χ² interval, widened by that bias's bounds (IEC 62047-20
 #: 5.1.3.7's max σ_i).
 K_SOURCE_SELECTED_MAX = "χ² interval of the largest spread over its selection excess"
+
+#: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of
+#: magnitudes (:func:`gonio.result.gum.max_magnitude_statement`: JJF 1535 and IEC 62047-20
+#: items); its ``value`` is the magnitude itself.
+K_SOURCE_MAX_MAGNITUDE = "interval of max|x_i| (uncertainty.extreme.max_abs_interval)"
+
+#: Every ``k_source`` of an item stated as an extreme of magnitudes max_i |x_i|: such an item
+#: is compared with a symmetric limit only, and accepted on its interval's upper end
+#: (:func:`is_magnitude_statement`).
+MAGNITUDE_K_SOURCES: tuple[str, ...] = (K_SOURCE_MAX_ABS, K_SOURCE_MAX_MAGNITUDE)
+
+
+def is_magnitude_statement(unc) -> bool:
+    """Whether an uncertainty (results.json dict or model object) states an extreme of
+    magnitudes max_i |x_i| (its ``k_source`` one of :data:`MAGNITUDE_K_SOURCES`): the kind of
+    statement, whichever specification or item computed it.
+
+    >>> is_magnitude_statement({"k_source": K_SOURCE_MAX_MAGNITUDE}), is_magnitude_statement(None)
+    (True, False)
+    """
+    return _get(unc, "k_source") in MAGNITUDE_K_SOURCES
 
 
 def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> Statement:
