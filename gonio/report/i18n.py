@@ -272,14 +272,15 @@ LABELS: dict[str, dict[str, str]] = {
     "c_acc_iv_upper": {"en": "interval's upper end ≤ {hi}", "zh": "区间上端 ≤ {hi}"},
     "c_acc_iv_lower": {"en": "interval's lower end ≥ {lo}", "zh": "区间下端 ≥ {lo}"},
     "c_acc_iv_both": {"en": "interval within [{lo}, {hi}]", "zh": "区间 ⊆ [{lo}, {hi}]"},
-    "c_no_p_note": {"en": "“—”: no probability is stated for {items}: the 95 % interval each "
-                          "is stated by is not that of a normal or chi-square distribution, "
-                          "and a normal N(y, u) would contradict it (JCGM 106:2012 takes "
-                          "the measurand's own distribution); the outcome is decided on that "
-                          "interval.",
-                    "zh": "“—”：{items} 不给出概率：其 95 % 区间不是正态分布或 χ² 分布的区间，"
-                          "正态模型 N(y, u) 与之矛盾（JCGM 106:2012 取被测量自身的分布）；"
-                          "判定依据该区间作出。"},
+    "c_no_p_note": {"en": "“—”: no probability is stated for {items}: its distribution is not one "
+                          "gonio evaluates (a 95 % interval that is not that of a normal or "
+                          "chi-square distribution, or a coverage factor k from a non-normal "
+                          "combined distribution), and a normal N(y, u) would contradict it "
+                          "(JCGM 106:2012 takes the measurand's own distribution); the outcome "
+                          "is decided on the interval, or on y ± U, as stated.",
+                    "zh": "“—”：{items} 不给出概率：其分布不是 gonio 所计算的分布（95 % 区间不是正态"
+                          "分布或 χ² 分布的区间，或包含因子 k 来自非正态的合成分布），正态模型 N(y, u) "
+                          "与之矛盾（JCGM 106:2012 取被测量自身的分布）；判定依据所给区间或 y ± U 作出。"},
     "c_interval_band_note": {
         "en": "Guard band of an item stated by its 95 % interval alone ({items}): U in w = r·U "
               "is the half-width of that interval as stated, (upper end − lower end)/2 "

@@ -265,8 +265,10 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
 def _half_text(lo: str, hi: str, r: float = 1.0) -> str:
     """r·(hi − lo)/2 of two stated ends (texts, maybe "×10⁻⁵"), exactly, as text.
 
-    >>> _half_text("0.066", "0.205"), _half_text("0", "1.4×10⁻⁵", 2.0)
+    >>> _half_text("0.066", "0.205"), _half_text("0", "0.000014", 2.0)
     ('0.0695', '0.000014')
+    >>> _half_text("1.555×10⁻⁴", "1.723×10⁻⁴")
+    '8.4×10⁻⁶'
     """
     from decimal import Decimal
     sub = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
@@ -275,7 +277,11 @@ def _half_text(lo: str, hi: str, r: float = 1.0) -> str:
         m, _, e = t.replace("−", "-").partition("×10")
         return Decimal(m) * Decimal(1).scaleb(int(e.translate(sub)) if e else 0)
     h = (dec(hi) - dec(lo)) / 2 * Decimal(repr(float(r)))
-    return given_text(float(h)) if h and abs(h.adjusted()) > 6 else format(h.normalize(), "f")
+    if h and ("×10" in lo + hi or abs(h.adjusted()) > 6):     # the ends' power-of-ten form
+        e = h.adjusted()
+        return f"{format(h.scaleb(-e).normalize(), 'f')}×10" + str(e).translate(
+            str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹"))
+    return format(h.normalize(), "f")
 
 
 def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:

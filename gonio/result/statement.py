@@ -376,8 +376,12 @@ def given_text(v: float) -> str:
 
     >>> given_text(0.3), given_text(-0.5), given_text(1e-05), given_text(-2.5e6)
     ('0.3', '-0.5', '1×10⁻⁵', '-2.5×10⁶')
+    >>> given_text(76434.87), given_text(1.23456789e-05)
+    ('76434.87', '1.23456789×10⁻⁵')
     """
     text = f"{float(v):g}"
+    if float(text) != float(v):          # %g keeps 6 digits: never round what was given
+        text = repr(float(v))
     if "e" not in text:
         return text
     mant, exp = text.split("e")           # the certificate's power-of-ten form, never "1e-05"
