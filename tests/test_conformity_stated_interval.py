@@ -187,6 +187,9 @@ def test_k_from_a_non_normal_distribution_gives_no_normal_probability():
             assert c.conformance_probability is None and c.false_accept_probability is None
             assert c.probability_model.startswith("not given") and "1.73" in \
                 c.probability_model
+            from gonio.report.i18n import translator    # the zh DCC states the reason too
+            zh = translator()(f"— ({c.probability_model})")
+            assert zh and "1.73" in zh and "不给出" in zh
         else:
             assert c.conformance_probability == pytest.approx(want - normal_cdf(
                 (76434.80 - (T - U)) / (U / k)), rel=1e-9)

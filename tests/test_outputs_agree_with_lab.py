@@ -10,8 +10,8 @@ tables/items.csv, the DCC XML and the certificate's HTML, for each specification
   is largest, found here from the per-point table (not from the value gonio stored);
 - the conformity decisions: the DCC declaration states the acceptance as the certificate does
   (never "acceptance interval interval …"), a "—" probability with its reason, and the
-  guard band's U of each interval item (= upper end − value, recomputed here) in the DCC and
-  on the certificate; summary.txt gives both guard bands where the interval is not symmetric;
+  guard band's U of each interval item (= half-width of its stated interval, recomputed here
+  from the ends as printed) in the DCC and on the certificate; summary.txt gives both guard bands where the interval is not symmetric;
 - the certificate's legend names the clauses of every interval-stated item under its kind
   (the extreme of magnitudes, the corrected maximum, …), in English and in Chinese.
 """
@@ -44,7 +44,7 @@ CASES = {
                           ("pointing_consistency", "upper = 0.0001"),
                           ("rate_consistency", "upper = 10.0")]),
     "jjf1535-2015": ('model = "ADXRS610-class"\nserial = "MEMS-0610-001"\n',
-                     [("bias_stability", "upper = 60.0"), ("g_sensitivity", "upper = 250.0"),
+                     [("bias_stability", "upper = 60.0"), ("g_sensitivity", "mpe = 250.0"),
                       ("sf_repeatability", "upper = 0.001"), ("threshold", "upper = 0.2"),
                       ("scale_factor", "lower = 5.99\nupper = 6.01"),
                       ("sf_temperature_sensitivity", "mpe = 0.0002"),
@@ -229,6 +229,13 @@ def test_certificate_and_summary_print_the_statement(issued):
                        for ln in summary.splitlines()), key
 
 
+def _number(text: str) -> float:
+    """A stated number as printed ("0.48", "1.4×10⁻⁵", "−0.3") as a float."""
+    m, _, e = text.replace("−", "-").partition("×10")
+    sub = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+    return float(m) * 10.0 ** (int(e.translate(sub)) if e else 0)
+
+
 def _declarations(root) -> dict:
     out = {}
     for st in root.iter(f"{{{DCC_NS}}}statement"):
@@ -239,9 +246,8 @@ def _declarations(root) -> dict:
 def test_conformity_is_declared_as_decided(issued):
     """Each decision's DCC declaration: the acceptance as the certificate states it, no
     doubled "interval", no bare "—" probability; the guard band's U of every item decided on
-    its interval (upper end − value, sig. 2) in the DCC's own statement and on the
+    its interval (half-width of the stated interval) in the DCC's own statement and on the
     certificate, en and zh; summary.txt (rate family) both guard bands where two."""
-    from gonio.report.i18n import display
 
     res = issued["res"]
     decided = {k: it["conformity"] for k, it in res["items"].items()
@@ -257,16 +263,18 @@ def test_conformity_is_declared_as_decided(issued):
             assert "acceptance interval interval" not in en, en
             assert "probability —;" not in en and not en.rstrip().endswith("—"), en
             if c["conformance_probability"] is None:
-                assert "— (not given" in en, en
+                # the bound an accepted interval item states (1 − p), or "—", with the reason
+                bound = c.get("false_accept_bound")
+                assert (re.search(r"probability ≤ [\d.]+ % \(not given", en) if bound
+                        is not None else "— (not given" in en), en
             if lang == "zh":
                 assert len(texts) == 2 and "接受" in texts[1], texts
             if c.get("acceptance_of") == "interval" and c["rule"] != "simple":
-                y, U = c["value"], c["U"]
-                it = res["items"][key]
-                assert y + U == pytest.approx(it["uncertainty"]["interval"][1], rel=1e-9)
-                want = f"U = {display('sig2', U)}"
+                lo_t, hi_t = c["stated_interval"]
+                assert c["U"] == pytest.approx((_number(hi_t) - _number(lo_t)) / 2, rel=1e-9)
+                want = f"U = ({hi_t} − {lo_t})/2"
                 assert band and all(want in b for b in band), (key, want, band)
-                assert want in re.sub(r"<[^>]+>", "", html), (key, want)
+                assert want in html_lib.unescape(re.sub(r"<[^>]+>", "", html)), (key, want)
     if issued["spec"] in ("jjf1535-2015", "iec62047-20", "triad-alignment"):
         for key, c in decided.items():
             line = next(ln for ln in issued["summary"].splitlines()

@@ -212,7 +212,9 @@ def declaration_parts(c, t: dict) -> tuple[str, str]:
     summary line), from :func:`conformity_texts`'s ``t``: "acceptance interval [a, b]" for an
     acceptance on the value, "acceptance: interval's upper end ≤ 0.5" for one on the stated
     interval's ends (never "acceptance interval interval's …"), and "—" with its reason where
-    no probability is given ("— (not given: …)"), never a bare "—".
+    no probability is given ("— (not given: …)"), never a bare "—"; the bound an accepted
+    interval item states instead (``false_accept_bound``) with the same reason,
+    "≤ 5.0 % (not given: …)".
 
     >>> declaration_parts({"acceptance_of": "interval"}, {"acceptance":
     ...     "interval's upper end ≤ 0.5", "pfa": "—", "no_p": "not given: why"})
@@ -223,7 +225,8 @@ def declaration_parts(c, t: dict) -> tuple[str, str]:
     of = c.get("acceptance_of") if isinstance(c, dict) else getattr(c, "acceptance_of", None)
     acc = (f"acceptance: {t['acceptance']}" if of == "interval"
            and t["acceptance"].startswith("interval") else f"acceptance interval {t['acceptance']}")
-    pfa = f"— ({t['no_p']})" if t["pfa"] == "—" and t.get("no_p") else t["pfa"]
+    pfa = (f"— ({t['no_p']})" if t["pfa"] == "—" and t.get("no_p")
+           else f"{t['pfa']} ({t['no_p']})" if t.get("no_p") else t["pfa"])
     return acc, pfa
 
 
