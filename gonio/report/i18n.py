@@ -688,6 +688,14 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      r"distribution \((.+)\), not of N\(y, U/k\); the outcome is decided on y ± U\)",
      "—（不给出：其 k = {1} 为非正态合成分布（{2}）的 95 % 包含因子，不是 N(y, U/k) 的；"
      "判定依据 y ± U 作出）"),
+    # the bound an accepted interval item states where no probability is computed, with
+    # the reason (report.stated.declaration_parts)
+    (r"(≤ \S+ %) \((not given: .+)\)", "{1}（{2}）"),
+    (r"not given: the extreme of several points; the outcome is decided on its 95 % interval",
+     "不给出：多个点的极值；判定依据其 95 % 区间作出"),
+    (r"not given: its 95 % interval \((.+)\) is not that of a normal or chi-square "
+     r"distribution; the outcome is decided on its 95 % interval",
+     "不给出：其 95 % 区间（{1}）不是正态分布或 χ² 分布的区间；判定依据其 95 % 区间作出"),
     (r"Guard band of the items stated by an interval", "以区间表述的项目的保护带"),
     (r"; rule (\S+)", "；判定规则 {1}"),
     (r"; (.+)", "；{1}"),
