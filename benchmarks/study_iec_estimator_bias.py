@@ -4,7 +4,7 @@ where the transient flattens. Prints, per case, the reading's and the estimate's
 and the coverage of the stated interval (5.1.3.7), or the count's and the corrected value's
 mean error against the closed-form truth (5.3.3.9).
 
-    PYTHONPATH=$PWD python benchmarks/study_iec_estimator_bias.py [--records 1500] [--seed 7]
+    PYTHONPATH=$PWD python benchmarks/study_iec_estimator_bias.py [--records 1500] [--seed 7] [--only unequal]
 """
 
 from __future__ import annotations
@@ -43,6 +43,32 @@ def spreads(seed: int, n_rec: int) -> None:
               f"  {np.mean(cov):.3f}  {np.mean(z):+.2f}   {np.std(z, ddof=1):.2f}   ({np.mean(cov_raw):.3f})")
 
 
+def unequal_lengths(seed: int, n_rec: int) -> None:
+    """The interval of max σ_i where the records' ν differ (each δ_i = σ_i·√(χ²_ν_i/ν_i)):
+    coverage, each side's misses, and the width against one record's exact χ² interval."""
+    from scipy import stats
+
+    from gonio.specs.iec62047_20.formulas import max_spread_estimate
+
+    rng = np.random.default_rng(seed)
+    print("5.1.3.7  true σ_i        ν_i          cover   below   above   width/σ  (one record's χ² width/σ at ν_top)")
+    for sig, nu in (((1.0, 2.0), (299, 4)), ((1.0, 1.5), (299, 9)), ((1.0, 1.0), (4, 299)),
+                    ((1.0, 1.0), (299, 299)), ((1.0, 1.0, 1.0), (49, 49, 49))):
+        s, v = np.array(sig), np.array(nu, dtype=float)
+        truth, j = float(s.max()), int(np.argmax(s))
+        lo_m = hi_m = 0
+        w = []
+        for _ in range(n_rec):
+            lo, hi = max_spread_estimate(s * np.sqrt(rng.chisquare(v) / v), v)["interval"]
+            lo_m += truth < lo
+            hi_m += truth > hi
+            w.append((hi - lo) / truth)
+        one = (math.sqrt(v[j] / stats.chi2.ppf(0.025, v[j]))
+               - math.sqrt(v[j] / stats.chi2.ppf(0.975, v[j])))
+        print(f"         {str(sig):15s} {str(nu):12s} {1 - (lo_m + hi_m) / n_rec:.3f}  "
+              f"{lo_m / n_rec:.3f}   {hi_m / n_rec:.3f}   {np.mean(w):.3f}    ({one:.3f})")
+
+
 def startup(seed: int, n_rec: int) -> None:
     from gonio.specs._rate_family import formulas as rg
     from gonio.specs.iec62047_20.items import startup_time_record
@@ -77,8 +103,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--records", type=int, default=1500)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--only", choices=("spreads", "unequal", "startup"), default=None)
     a = ap.parse_args(argv)
+    if a.only == "unequal":
+        unequal_lengths(a.seed, a.records)
+        return 0
     spreads(a.seed, a.records)
+    unequal_lengths(a.seed, a.records)
     startup(a.seed, max(a.records // 3, 100))
     return 0
 

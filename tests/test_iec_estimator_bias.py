@@ -187,3 +187,72 @@ def test_startup_item_value_is_the_corrected_count(calibrated):
     assert np.all(det["curvature_bias_s"] > 0)
     rows = {c["symbol"]: c for c in it.uncertainty.components}
     assert rows["curvature"]["u"] == pytest.approx(np.mean(det["curvature_bias_s"]) / math.sqrt(3))
+
+
+@pytest.mark.parametrize("sigmas, dofs", [((1.0, 2.0), (299, 4)), ((1.0, 1.5), (299, 9)),
+                                          ((1.0, 1.0), (4, 299)), ((1.0, 1.0), (299, 299))])
+def test_sf_stability_interval_covers_with_unequal_record_lengths(sigmas, dofs):
+    """The measurand is max σ_i: the interval's upper end is the largest of the records' own
+    χ² upper bounds, each at its own ν (the top record's bound alone covered 0.876 at σ
+    (1, 2), ν (299, 4)). 1000 draws of the scaled χ per case: each side misses at most
+    2.5 % plus 3 binomial standard errors; for equal ν the width is within 1.3 × that of
+    one record's exact χ² interval at that ν (not absurdly wide)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(20261201)
+    s, nu = np.array(sigmas), np.array(dofs, dtype=float)
+    truth = float(s.max())
+    below = above = 0
+    width = []
+    n = 1000
+    for _ in range(n):
+        d = s * np.sqrt(rng.chisquare(nu) / nu)
+        lo, hi = max_spread_estimate(d, nu)["interval"]
+        below += truth < lo
+        above += truth > hi
+        width.append(hi - lo)
+    tol = 0.025 + 3 * math.sqrt(0.025 * 0.975 / n)
+    assert below / n <= tol and above / n <= tol, (below, above)
+    assert (below + above) / n <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / n)
+    if dofs[0] == dofs[1]:
+        v = dofs[0]
+        one = truth * (math.sqrt(v / stats.chi2.ppf(0.025, v))
+                       - math.sqrt(v / stats.chi2.ppf(0.975, v)))
+        assert np.mean(width) < 1.3 * one, (np.mean(width), one)
+
+
+def test_max_spread_bounds_upper_end_is_every_records_own_bound():
+    """Against the χ² quantiles directly: the upper end is the largest of each record's own
+    upper bound at its ν, so a short record below the top still sets it."""
+    from scipy import stats
+
+    from gonio.specs.iec62047_20.formulas import max_spread_bounds
+
+    d, nu = [1.0, 0.9], [299, 4]
+    own = [x * math.sqrt(v / stats.chi2.ppf(0.025, v)) for x, v in zip(d, nu)]
+    assert own[1] > own[0]
+    assert max_spread_bounds(d, nu)[1] == pytest.approx(max(own), rel=1e-12)
+    assert max_spread_estimate(d, nu)["interval"][1] == pytest.approx(max(own), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed, amp", [(0, 0.045), (5, 0.045)])
+def test_startup_record_that_never_leaves_the_band_is_zero_not_negative(seed, amp):
+    """A record whose smoothed values never leave the band (count 0 s) has no crossing: no
+    curvature correction, the start-up time 0 s (a reviewer's records gave −2.22 s)."""
+    rng = np.random.default_rng(seed)
+    tt = np.arange(0, 3000, 10.0)
+    ys = amp * np.exp(-tt / 150) + rng.normal(0, 0.0095, tt.size)
+    r = startup_time_record(tt, ys, ys, 0.05, lambda a, b: 0.011)
+    assert r["count_s"] == 0.0
+    assert r["curvature_bias_s"] == 0.0 and r["corrected_s"] == 0.0
+
+
+def test_startup_correction_never_below_zero():
+    """Where a crossing exists the correction applies (t''·var/2 at ρ = 1, τ·var/(2 b²) on
+    an exponential), but a corrected time is never negative."""
+    from gonio.specs.iec62047_20.items import startup_curvature_corrected_s
+
+    var = 0.0095 ** 2 + 0.011 ** 2
+    b, c = startup_curvature_corrected_s(130.0, TAU_S / BAND_DPS, BAND_DPS, var)
+    assert b == pytest.approx(TAU_S * var / (2 * BAND_DPS ** 2)) and c == pytest.approx(130 - b)
+    assert startup_curvature_corrected_s(2.0, TAU_S / BAND_DPS, BAND_DPS, var) == (2.0, 0.0)

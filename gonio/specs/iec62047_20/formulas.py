@@ -28,6 +28,7 @@ Contents
 :func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (posterior mean)
 :func:`max_spread_moments`      IEC 5.1.3.7: E and sd of max δ_i, δ_i independent scaled χ
 :func:`max_spread_estimate`     IEC 5.1.3.7: max σ_i from max δ_i, the maximum's bias removed
+:func:`max_spread_bounds`       IEC 5.1.3.7: bounds of max σ_i, any record lengths
 ==============================  ==================================================
 """
 
@@ -503,7 +504,8 @@ def max_spread_estimate(spreads, dofs, p: float = 0.95, noise: bool = True) -> d
     Returns ``value`` = max δ_i − B_mid; ``u_c`` = √(sd(δ_top)² + u_B²) (sd of the largest
     spread's own scaled χ: where the true spreads differ, the maximum's distribution at the
     measured spreads, narrower where they look alike, would understate); the 95 %
-    ``interval`` of max σ_i: δ_top − S = σ_top·√(χ²_ν/ν) for a selection excess S (beyond
+    ``interval`` of max σ_i (its upper end and a floor under its lower end from
+    :func:`max_spread_bounds`, which hold for any record lengths): δ_top − S = σ_top·√(χ²_ν/ν) for a selection excess S (beyond
     Jensen's) in [0, S_max], S_max = B_max − B_min, so the exact χ² interval of σ_top
     (JCGM 101 7.7 for a scaled χ; the one of :func:`gonio.result.gum.std_dev_uncertainty`,
     two-sided here) of every δ_top − S, united: [(δ_top − S_max)·√(ν/χ²_{ν,(1+p)/2}),
@@ -544,7 +546,46 @@ def max_spread_estimate(spreads, dofs, p: float = 0.95, noise: bool = True) -> d
 
     e, sd = max_spread_moments([top], [nu[i]])
     lo = (top - (b_hi - b_lo)) * math.sqrt(nu[i] / stats.chi2.ppf((1 + p) / 2, nu[i]))
-    hi = top * math.sqrt(nu[i] / stats.chi2.ppf((1 - p) / 2, nu[i]))
+    lo_all, hi = max_spread_bounds(s, nu, p)
     return {"value": value, "u_c": math.sqrt(sd * sd + u_b * u_b), "sd_max": sd, "u_bias": u_b,
-            "interval": (max(lo, 0.0), hi), "reading": top, "bias": b_mid,
+            "interval": (max(min(lo, lo_all), 0.0), hi), "reading": top, "bias": b_mid,
             "bias_bounds": (b_lo, b_hi), "contenders": m}
+
+
+def max_spread_bounds(spreads, dofs, p: float = 0.95) -> tuple[float, float]:
+    """IEC 62047-20 5.1.3.7, the bounds of the largest TRUE spread max σ_i that hold for
+    any true spreads and any record lengths (the reading of the standard's silence on how a
+    maximum of spreads of unequal records is bounded; the one function for it): each record
+    alone gives the exact χ² interval of its σ_i (JCGM 101 7.7 for a scaled χ,
+    δ_i = σ_i·√(χ²_ν_i/ν_i), at its OWN ν_i), and
+
+    - upper end: max_i δ_i·√(ν_i/χ²_{ν_i,(1−p)/2}), the largest of the records' own upper
+      bounds, each at one-sided level (1 − p)/2. It misses max σ_i only when the record j
+      holding the largest true spread misses its own σ_j (max_i U_i < σ_j ⇒ U_j < σ_j), so
+      P(miss) ≤ (1 − p)/2 with no multiplicity correction (a Bonferroni or Šidák split
+      would only widen it). The top record's bound alone is not this: with unequal ν a
+      short record's δ can fall below a long record's, and the long record's bound then
+      stands for the short one's σ (true σ (1, 2), ν (299, 4): 0.876 coverage).
+    - lower end: max_i δ_i·√(ν_i/χ²_{ν_i,1−a}), a = 1 − (1 − (1 − p)/2)^(1/n) (Šidák,
+      the n records independent): all n lower bounds hold together with probability
+      1 − (1 − p)/2, and then their maximum is below max σ_i.
+
+    Coverage ≥ p for every σ and ν (proved above; checked by Monte Carlo in
+    tests/test_iec_estimator_bias.py). :func:`max_spread_estimate` states the lower of this
+    lower end and its own (the selection excess's), and this upper end.
+
+    >>> lo, hi = max_spread_bounds([1.0, 1.9], [299, 4])
+    >>> round(hi, 3) == round(1.9 * math.sqrt(4 / __import__("scipy").stats.chi2.ppf(0.025, 4)), 3)
+    True
+    >>> max_spread_bounds([1.0, 0.5], [299, 4])[1] > max_spread_bounds([1.0], [299])[1]
+    True
+    """
+    from scipy import stats
+
+    s, nu = as_array(spreads, "spreads"), as_array(dofs, "dofs")
+    if s.shape != nu.shape or s.size == 0:
+        raise GonioError(f"max spread bounds: {s.size} spreads and {nu.size} dofs")
+    a = 1.0 - (1.0 - (1.0 - p) / 2) ** (1.0 / s.size)
+    lo = float(np.max(s * np.sqrt(nu / stats.chi2.ppf(1.0 - a, nu))))
+    hi = float(np.max(s * np.sqrt(nu / stats.chi2.ppf((1.0 - p) / 2, nu))))
+    return lo, hi

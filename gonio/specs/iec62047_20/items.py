@@ -1597,12 +1597,40 @@ def startup_time_record(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: flo
     a = max(min(t_c - w / 2, end - span - w), 0.0)
     u_dr = drift_u((a, w), (end - span, span))
     var = s_b ** 2 + u_ref ** 2 + u_dr ** 2
-    bias = startup_curvature_bias_s(slope_t, band, var)
+    bias, corrected = startup_curvature_corrected_s(t_c, slope_t, band, var)
     out.update(u_s=math.sqrt(step * s_b * slope_t / math.sqrt(math.pi)
                              + slope_t ** 2 * (u_ref ** 2 + u_dr ** 2)),
                slope_s_per_dps=slope_t, level_var_dps2=var, curvature_bias_s=bias,
-               corrected_s=t_c - bias)
+               corrected_s=corrected)
     return out
+
+
+def startup_curvature_corrected_s(count_s: float, slope_s_per_dps: float, band: float,
+                                  level_var_dps2: float) -> tuple[float, float]:
+    """5.3.3.9, one record: (the curvature correction applied s, the corrected start-up time
+    s) from the count ``count_s`` — the reading of where the correction applies (the
+    standard has none; gonio's one function for it). The correction t''·var/2
+    (:func:`startup_curvature_bias_s`) is the second-order term of the crossing time's
+    expectation under the level's jitter (the Taylor expansion of JCGM 100 5.1.2's note;
+    E[t(L + e)] ≥ t(L) for a convex t, Jensen, as JCGM 101 propagates it): it exists only
+    where the record has a crossing. A record whose smoothed values never leave the band
+    (count 0 s) has none: its start-up time is stated 0 s, uncorrected (no value of the
+    record lay outside the band; the correction is 0 and enters no budget). Where a
+    crossing exists the correction is applied but never below 0 s: a start-up time is not
+    negative, and the correction is capped at the count (the record's corrected time 0 s).
+
+    >>> startup_curvature_corrected_s(0.0, 1041.0, 0.05, 0.011 ** 2 + 0.0095 ** 2)
+    (0.0, 0.0)
+    >>> b, c = startup_curvature_corrected_s(130.0, 150 / 0.05, 0.05, 0.0095 ** 2 + 0.011 ** 2)
+    >>> round(b, 2), round(c, 2)
+    (6.34, 123.66)
+    >>> startup_curvature_corrected_s(10.0, 3000.0, 0.05, 0.04 ** 2)
+    (10.0, 0.0)
+    """
+    if count_s <= 0.0:
+        return 0.0, 0.0
+    bias = min(startup_curvature_bias_s(slope_s_per_dps, band, level_var_dps2), count_s)
+    return bias, count_s - bias
 
 
 def startup_curvature_bias_s(slope_s_per_dps: float, band: float, level_var_dps2: float) -> float:
