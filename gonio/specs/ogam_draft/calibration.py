@@ -2383,6 +2383,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
         sha = sha256_file(readings)
     settings, more = session_settings(rd, proto)
     conflicts += more
+    if table_calibration is not None:
+        from gonio.specs.ogam_draft.table_calibration import screen_against_mpe
+        screen_against_mpe(table_calibration, settings["table_mpe_arcsec"])
     kept, excluded, findings = screen_readings(rd, proto, findings)
     res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=proto.pointing_reference)

@@ -32,7 +32,8 @@ from gonio.errors import GonioError
 
 __all__ = ["TableCalibration", "read_table_calibration", "from_equal_division",
            "turned_error_arcsec", "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG",
-           "MIN_DRAW_DOF", "draw_dof_refusal"]
+           "MIN_DRAW_DOF", "draw_dof_refusal", "screen_against_mpe", "MPE_SCREEN_K",
+           "U_FLOOR_OF_MPE"]
 
 REQUIRED_COLUMNS = ("table_deg", "error_arcsec", "u_arcsec")
 #: A session's position matches a calibrated one within this (degrees, modulo 360°).
@@ -67,6 +68,9 @@ class TableCalibration:
     blind_orders: tuple = ()
     #: SHA-256 of the file it was read from (None: not read from a file).
     sha256: str | None = None
+    #: The file's line of each position (None: not read from a file), for the screen's
+    #: messages (:func:`screen_against_mpe`).
+    lines: tuple | None = None
 
     def __post_init__(self):
         pos = _wrap_deg(self.table_deg)
@@ -240,7 +244,60 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
     return TableCalibration(np.array(cols["table_deg"]), np.array(cols["error_arcsec"]),
                             np.array(cols["u_arcsec"]), p.name,
                             dof=np.array(cols["dof"]) if "dof" in cols else None,
-                            sha256=hashlib.sha256(raw).hexdigest())
+                            sha256=hashlib.sha256(raw).hexdigest(),
+                            lines=tuple(n for n, _ in rows[1:]))
+
+
+#: A calibrated error beyond MPE + this many u is a table out of its specification.
+MPE_SCREEN_K = 3.0
+#: The smallest u a calibration file may state, as a fraction of the table's MPE.
+U_FLOOR_OF_MPE = 0.01
+
+
+def screen_against_mpe(calibration: TableCalibration, mpe_arcsec: float) -> None:
+    """A calibration file's numbers against the table's maximum permissible error as the
+    readings state it (``table_mpe_arcsec``, the draft's Table 1 / A.4.1): a GonioError
+    naming the file, line and column of the first implausible row, else None. The one rule
+    (beyond the draft; documented in docs/formats.md, "Table calibration"):
+
+    * |e| > MPE + 3u: the calibration shows the table outside its specification beyond any
+      plausible doubt (3u: a normal's 99.7 %); a table out of specification is repaired or
+      its MPE restated in the readings, never certified through silently;
+    * u > MPE: a calibration that cannot tell whether the table meets its MPE is no better
+      than the MPE line (leave it out);
+    * u < MPE/100 (0.001″ at the draft's 0.1″): below what any angle standard reaches (the
+      best national comparators state some 0.005–0.01″), a typo or a unit slip, and it
+      would make the table line vanish from K, E, C_v and C_g.
+
+    A calibration not read from a file (an equal-division comparison's, whose gauge
+    position has u = 0 by construction) is not screened here.
+
+    >>> c = TableCalibration([0, 120], [0.01, 0.2], [0.02, 0.02], "t.csv", lines=(2, 3))
+    >>> screen_against_mpe(c, 0.1)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: t.csv:3: column error_arcsec: error 0.2″ at 120 deg is beyond the table's MPE 0.1″ + 3u (0.06″): the table is out of its specification (repair it, or state its MPE in the readings' table_mpe_arcsec)
+    """
+    if calibration.lines is None:
+        return
+    mpe = float(mpe_arcsec)
+    floor = U_FLOOR_OF_MPE * mpe
+    for x, e, u, n in zip(calibration.table_deg, calibration.error_arcsec,
+                          calibration.u_arcsec, calibration.lines):
+        where = dict(file=calibration.source, line=n)
+        if u > mpe:
+            raise GonioError(f"u {u:g}″ at {x:g} deg is above the table's MPE {mpe:g}″: "
+                             "such a calibration cannot show the table within it (leave it "
+                             "out: the MPE line is used)", column="u_arcsec", **where)
+        if u < floor:
+            raise GonioError(f"u {u:g}″ at {x:g} deg is below {floor:g}″ (the table's MPE "
+                             f"{mpe:g}″ / {1 / U_FLOOR_OF_MPE:g}), beyond any angle standard: "
+                             "a typo or a unit slip?", column="u_arcsec", **where)
+        if abs(e) > mpe + MPE_SCREEN_K * u:
+            raise GonioError(f"error {e:g}″ at {x:g} deg is beyond the table's MPE {mpe:g}″ "
+                             f"+ {MPE_SCREEN_K:g}u ({MPE_SCREEN_K * u:g}″): the table is out of "
+                             "its specification (repair it, or state its MPE in the readings' "
+                             "table_mpe_arcsec)", column="error_arcsec", **where)
 
 
 #: The smallest degrees of freedom a calibration's u may state (:func:`draw_dof_refusal`).
@@ -262,21 +319,32 @@ def draw_dof_refusal(dof) -> str | None:
     ``gonio simulate --seed 3``). Such a calibration is refused rather than floored (a floor
     at 3 would state a better-known table than the certificate does) or summarised by
     quantiles (a second, unvalidated estimator); ν = 3, the smallest integer with a variance,
-    is the floor. A certificate with ν ≤ 2 is stated with k from t_ν; enter it without
+    is the floor (2 < ν < 3 has a variance, ν/(ν − 2)·u², 5·u² at 2.5, but one that grows
+    without bound towards 2 and whose sample estimate has none itself: refused with the
+    variance stated). A certificate with ν ≤ 2 is stated with k from t_ν; enter it without
     ``dof`` only if its u is first expanded to a normal one (u·k_ν/k_∞), which is the
     laboratory's decision, not gonio's.
 
     >>> draw_dof_refusal(3), draw_dof_refusal(math.inf), draw_dof_refusal([30.0, 4.0])
     (None, None, None)
-    >>> draw_dof_refusal(2.0)
-    'dof must be >= 3 (a t of 2 degrees of freedom has no variance: the Monte Carlo of K_l, C_v and C_g cannot summarise it)'
+    >>> draw_dof_refusal(2.0).split(";")[0]
+    "dof must be >= 3, gonio's floor: a t of 2 degrees of freedom has no variance"
+    >>> draw_dof_refusal(2.5).split(";")[0]
+    "dof must be >= 3, gonio's floor: a t of 2.5 degrees of freedom has variance 5·u², growing without bound as ν falls to 2"
     """
     nu = np.asarray(dof, dtype=float)
     bad = nu[~(nu >= MIN_DRAW_DOF)]
     if bad.size == 0:
         return None
-    return (f"dof must be >= {MIN_DRAW_DOF:g} (a t of {float(bad.min()):g} degrees of freedom "
-            f"has no variance: the Monte Carlo of K_l, C_v and C_g cannot summarise it)")
+    low = float(np.nanmin(bad)) if np.isfinite(bad).any() else float(bad[0])
+    if low > 2.0:
+        why = (f"a t of {low:g} degrees of freedom has variance {low / (low - 2.0):.3g}·u², "
+               "growing without bound as ν falls to 2")
+    else:
+        why = f"a t of {low:g} degrees of freedom has no variance"
+    return (f"dof must be >= {MIN_DRAW_DOF:g}, gonio's floor: {why}; the Monte Carlo of K_l, "
+            "C_v and C_g is summarised by moments, sample noise near ν = 2, so ν below 3 (the "
+            "smallest integer with a variance) is refused")
 
 
 def _eda_blind(eda) -> tuple[np.ndarray | None, tuple]:
