@@ -24,9 +24,11 @@ from gonio.specs.ogam_draft.simulate import simulate
 
 ITEMS = ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency")
 NUS = (None, 30, 5, 3)
-#: the table errors of the reviewer's file (a 1st and 2nd harmonic), u 0.03″ at every position
-ERRORS = (0.0, 0.159808, 0.059808, -0.1, -0.259808, -0.359808, -0.2, 0.159808, 0.259808, -0.1,
-          -0.459808, -0.359808)
+#: the table errors of the reviewer's file (a 1st and 2nd harmonic) at a fifth of their size,
+#: so that they lie within the readings' table MPE 0.1″ + 3u (the file itself, to 0.46″, is
+#: a table out of specification, refused by ``screen_against_mpe``); u 0.03″ at every position
+ERRORS = tuple(0.2 * e for e in (0.0, 0.159808, 0.059808, -0.1, -0.259808, -0.359808, -0.2,
+                                 0.159808, 0.259808, -0.1, -0.459808, -0.359808))
 
 
 def _table_file(path, nu):
