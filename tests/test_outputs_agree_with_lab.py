@@ -323,3 +323,22 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
                 part = legend[legend.index(phrase[n]):]
                 bracket = re.search(r"[（(]([0-9., ()（）]+?)[)）](?:[;；.。]|$)", part)
                 assert bracket and clause in bracket.group(1), (lang, key, part[:300])
+
+
+def test_items_csv_nu_is_the_stated_nu(issued):
+    """items.csv's ν is the ν the statement prints (the certificate's ν_eff column): empty
+    where results.json's nu_eff is null and the certificate prints "—" (JJF warm-up time was
+    "inf"), "inf" only where the stated ν is ∞ (ν_eff above the normal threshold), else the
+    integer part of results.json's nu_eff (GUM G.6.4), recomputed here."""
+    import math
+
+    from gonio.result.statement import NU_INFINITE
+
+    res, rows = issued["res"], issued["rows"]
+    for key, it in measured(res).items():
+        nu, got = it["uncertainty"].get("nu_eff"), rows[key]["nu"]
+        if nu is None:
+            assert got == "", (key, got)
+        elif got:
+            want = math.inf if nu > NU_INFINITE else float(max(1, math.floor(nu)))
+            assert float(got) == want, (key, got, nu)

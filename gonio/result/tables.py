@@ -40,8 +40,9 @@ def item_row(key: str, it) -> dict:
 
     * stated as value ± U: ``U`` and ``k``; ``nu`` the ν_eff as stated and as k was
       computed from (:func:`~gonio.result.statement.stated_nu`: its integer part, ∞ above
-      the threshold or where ν_eff is infinite), empty where k did not come from ν (a JCGM
-      101 convolution's k, a fixed k): a ν beside such a k would read as its source;
+      the threshold or where ν_eff is infinite), empty where the statement states none (ν_eff
+      infinite, stored null in results.json, "—" on the certificate) or where k did not
+      come from ν (a JCGM 101 convolution's k, a fixed k): a ν beside such a k would read as its source;
     * stated by an interval (a dispersion's χ² interval, an extreme's Monte Carlo or
       max|x| interval, a non-negative quantity's [0, value + U]): ``interval_low`` and
       ``interval_high``, ``U`` and ``k`` empty (a reach beside an empty k reads as value ±
@@ -88,8 +89,11 @@ def item_row(key: str, it) -> dict:
         return row
     row.update(U=unc.U, k=unc.k)
     if _k_from_nu(unc):
-        nu = stated_nu(unc.nu_eff)
-        row["nu"] = math.inf if nu is None else nu
+        # the ν the statement prints: empty where none is stated (an infinite ν_eff is
+        # stored null in results.json, the certificate prints "—": the same row from the
+        # stored result as from the run), "inf" only where the certificate prints ∞
+        finite = unc.nu_eff is not None and math.isfinite(float(unc.nu_eff))
+        row["nu"] = stated_nu(unc.nu_eff) if finite else None
     return row
 
 
