@@ -31,10 +31,12 @@ ITEM_ROWS = (
     ("resolution", "resolution", "5.6"),
 )
 
-#: The items stated as a largest magnitude max_i |x_i| (5.1.3.5, 5.2, 5.3.3.3 and 5.3.3.8: the statement of
+#: The items stated as a largest magnitude max_i |x_i| (5.1.3.5, 5.1.3.6, 5.2, 5.3.3.3 and 5.3.3.8:
+#: the statement of
 #: ``gonio.result.gum.max_magnitude_statement``, marked ``K_SOURCE_MAX_MAGNITUDE``): a
 #: laboratory file's limit for them must be symmetric, checked before any work
 #: (``Specification.magnitude_extremes``). Conformity also knows an item of that kind by its
 #: statement's marker once calibrated, and a test (tests/test_conformity_stated_interval.py)
 #: checks that this list names exactly the items a calibration states so.
-MAGNITUDE_KEYS = ('ratiometric_error', 'cross_axis', 'bias_ratiometric_error', 'g_sensitivity')
+MAGNITUDE_KEYS = ('ratiometric_error', 'linearity', 'cross_axis', 'bias_ratiometric_error',
+                  'g_sensitivity')

@@ -23,10 +23,12 @@ ITEM_ROWS = (
     ("bandwidth", "bandwidth B_w", "7.2.15"),
 )
 
-#: The items stated as a largest magnitude max_i |x_i| (7.2.5 K_t, 7.2.12 B_g and 7.2.14 B_t: the statement of
+#: The items stated as a largest magnitude max_i |x_i| (7.2.2 K_n, 7.2.3 K_a, 7.2.5 K_t, 7.2.12
+#: B_g and 7.2.14 B_t: the statement of
 #: ``gonio.result.gum.max_magnitude_statement``, marked ``K_SOURCE_MAX_MAGNITUDE``): a
 #: laboratory file's limit for them must be symmetric, checked before any work
 #: (``Specification.magnitude_extremes``). Conformity also knows an item of that kind by its
 #: statement's marker once calibrated, and a test (tests/test_conformity_stated_interval.py)
 #: checks that this list names exactly the items a calibration states so.
-MAGNITUDE_KEYS = ('sf_temperature_sensitivity', 'g_sensitivity', 'bias_temperature_sensitivity')
+MAGNITUDE_KEYS = ('nonlinearity', 'asymmetry', 'sf_temperature_sensitivity', 'g_sensitivity',
+                  'bias_temperature_sensitivity')
