@@ -455,6 +455,8 @@ class Analysis:
             extra["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
         if "unused_readings_summary" in rd:
             extra["unused_readings_summary"] = rd["unused_readings_summary"]
+        extra["screening"] = {"set_aside_readings": 0 if self.excluded is None
+                              else int(len(self.excluded))}
         extra["method"] = method_settings(self.protocol)
         extra["figures"] = figure_series(self.results, self.uncertainty)
         extra["warnings"] = self.warnings()

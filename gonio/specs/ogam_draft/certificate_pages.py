@@ -85,8 +85,11 @@ def screening_notes(res: dict, L: dict, add) -> None:
     found = [f for f in res.get("findings") or () if f["action"] != "refused"]
     if not found:
         return
-    aside = sum(f["action"] == "set_aside" for f in found)
-    flagged = len(found) - aside
+    flagged = sum(f["action"] == "flagged" for f in found)
+    # every reading set aside (a condition outside the programme is one finding, all its
+    # readings aside): the count the calibration stored, else one per finding
+    aside = ((res.get("extra") or {}).get("screening") or {}).get(
+        "set_aside_readings", len(found) - flagged)
     add("notice", L["screening_note"].format(n=aside, m=flagged))
     names = {k: L[k] for k in item_names(res) if k in L}   # a test named by its item
     for f in found[:MAX_FINDING_LINES]:

@@ -646,32 +646,50 @@ def consistency_reference_angle(points: pd.DataFrame) -> tuple[float, float]:
             float(points["position_deg"].iloc[i]))
 
 
-def _set_aside_incomplete(per_cond: list, fmt) -> tuple[list, list]:
-    """Conditions of 7.6/7.7 compared, and those set aside (with their rows' reason).
+def consistency_incomplete(per_cond: list, fmt, clause: str) -> str | None:
+    """*Ambiguity* (7.6, 7.7): a condition that lacks a calibration position the others have.
 
-    A condition that lacks a calibration position the typical conditions share is
-    set aside whole — never used to shrink the others' comparison. The target
-    positions are those common to every condition with at least the median number
-    of positions, within the reference condition's; a condition (never the
-    reference) missing any of them is set aside with the reason. So one stray
-    reading at an unplanned rate is set aside alone and does not decide which good
-    readings are compared.
+    7.6 "calibrate E at each rate (E_v)", 7.7 "calibrate E in each [direction] (E_g)": E at
+    a condition is 7.4's result, ± max |E_i| over the programme's calibration points. A
+    position read in no series of a condition leaves that condition without a 7.4 E (the
+    extreme over fewer points is at most as large), and neither remedy gives the clause's C:
+    setting the condition aside makes the range over fewer conditions (one missing 1 °/s
+    reading took the most adverse rate away, C_v 1.5 → 0.26 ppm, stated over the programme),
+    and comparing only the positions every condition shares changes every other condition's
+    E. **Reading taken**: a position (rounded to ``POSITION_DECIMALS``) of the reference
+    condition (7.4's points), or that at least two conditions of the item have, and that
+    another condition has in none of its series makes the item not measured; the reason
+    names each such condition and its missing positions. A position read at one condition
+    only, not the reference, is not compared (listed unused). A position missing from
+    some series of a condition only is not missing: its mean is over the series that read
+    it, and the item's uncertainty takes the fewer series (its repeatability term).
+
+    Returns the reason, or None when every condition has every position.
+
+    >>> p = lambda *k: (None, None, None, None, pd.DataFrame({"key": list(k)}), False)
+    >>> fmt = lambda v: "x"
+    >>> r = consistency_incomplete([p(30.0, 60.0), p(30.0, 60.0), p(30.0)], fmt, "7.6")
+    >>> r.split(": ", 1)[1].split(";")[0]
+    'x lacks 60 deg (1 of 2 positions)'
+    >>> consistency_incomplete([p(30.0, 60.0), p(60.0, 30.0, 90.0)], fmt, "7.6") is None
+    True
+    >>> ref = (None, None, None, None, pd.DataFrame({"key": [30.0, 60.0]}), True)
+    >>> consistency_incomplete([ref, p(30.0)], fmt, "7.7") is None
+    False
     """
-    sizes = [len(set(p["key"])) for *_, p, _ in per_cond]
-    med = float(np.median(sizes))
-    typical = [set(p["key"]) for (*_, p, ref), n in zip(per_cond, sizes) if n >= med or ref]
-    target = set.intersection(*typical)
-    kept, aside = [], []
-    for item in per_cond:
-        v, src, g, long, points, ref = item
-        have = set(points["key"])
-        if ref or target <= have:
-            kept.append(item)
-        else:
-            aside.append((list(g["line"]), f"{src} at {fmt(v)} measured {len(have & target)} of "
-                          f"the {len(target)} positions the other conditions share; condition "
-                          "set aside (not compared)"))
-    return kept, aside
+    have = [set(p["key"]) for *_, p, _ in per_cond]
+    seen = [x for h in have for x in h]
+    target = {x for x in set(seen) if seen.count(x) >= 2}
+    target |= set().union(*(h for h, (*_, ref) in zip(have, per_cond) if ref))
+    short = [(v, sorted(target - h)) for (v, *_), h in zip(per_cond, have) if target - h]
+    if not short:
+        return None
+    said = "; ".join(f"{fmt(v)} lacks {', '.join(f'{x:g}' for x in miss)} deg "
+                     f"({len(target) - len(miss)} of {len(target)} positions)"
+                     for v, miss in short)
+    return (f"{clause} compares E over the same calibration positions at every condition: "
+            f"{said}; not stated from fewer conditions or positions (read the missing "
+            "position again)")
 
 
 def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_value,
@@ -719,10 +737,12 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
         long, points = _deviation_tables(g, k)
         points["key"] = points["position_deg"].round(POSITION_DECIMALS)
         per_cond.append((v, src, g, long, points, ref))
-    per_cond, set_aside = _set_aside_incomplete(per_cond, fmt)
-    for lines, reason in set_aside:
-        for l in lines:
-            unused.setdefault(int(l), reason)
+    reason = consistency_incomplete(per_cond, fmt, _CLAUSES[name])
+    if reason is not None:
+        for *_, g, _long, _points, _ref in per_cond:
+            for l in g["line"]:
+                unused.setdefault(int(l), reason)
+        return Characteristic(name=name, reason=reason, unused=unused)
     common = set.intersection(*(set(p["key"]) for *_, p, _ in per_cond))
     if len(per_cond) < 2:
         reason = f"{_CLAUSES[name]} needs at least 2 complete conditions"
@@ -778,8 +798,9 @@ def rate_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | None
     means over series, as in :func:`angle_deviation`. If no
     ``rate_consistency`` row is at the reference rate, the ``angle_deviation``
     rows at that rate serve ("if 7.4 is done, 60 °/s need not be repeated").
-    Only positions present in every condition are compared (others are
-    reported unused). C_v = (max E_v − min E_v) / reference angle · 10⁶, the
+    A condition missing a position the reference or two conditions have
+    leaves C_v not measured (:func:`consistency_incomplete`); a position read
+    at one condition only is not compared (reported unused). C_v = (max E_v − min E_v) / reference angle · 10⁶, the
     reference angle from :func:`consistency_reference_angle`;
     ``spread_arcsec`` = max E_v − min E_v.
 

@@ -150,6 +150,23 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
     (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the condition's median "
      r"(\S+)″ by (\S+)″ \(> (\S+)″\)",
      "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件的中位数 {4}″ 达 {5}″（> {6}″）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the round's median "
+     r"(\S+)″ by (\S+)″ \(> (\S+)″\) \(K_ref = (\S+) counts/° from the other readings\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该测回的中位数 {4}″ 达 {5}″（> {6}″；"
+     "K_ref = {7} 脉冲数/(°)，由其余读数求得）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the round's median "
+     r"(\S+)″ by (\S+)″ \(> (\S+)″\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该测回的中位数 {4}″ 达 {5}″（> {6}″）"),
+    (r"zero_stability \(7\.3\) series (\d+): (\d+) of the protocol's (\d+) readings (\S+) s "
+     r"apart; round\(s\) (.+) missing; B_s rests on the (\d+) readings read, T = (\S+) s "
+     r"from the first to the last",
+     "零位稳定性（7.3）第 {1} 组：校准方案规定 {3} 个读数（间隔 {4} s），读得 {2} 个；第 {5} "
+     "个读数缺失；B_s 依据所读的 {6} 个读数，T = {7} s（首末读数之间）"),
+    (r"zero_stability \(7\.3\) series (\d+) round (\d+): read at (\S+) s, the schedule's "
+     r"(\S+) s \(round 1 at (\S+) s, (\S+) s apart\); used as read, T = (\S+) s from the "
+     r"first to the last reading",
+     "零位稳定性（7.3）第 {1} 组第 {2} 个读数：在 {3} s 读取，按计划应在 {4} s（第 1 个读数在 "
+     "{5} s，间隔 {6} s）；按实际读数时刻使用，T = {7} s（首末读数之间）"),
     (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
     (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading",
@@ -158,6 +175,10 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      r"series; the item rests on (\d+) of the programme's (\d+) rounds",
      "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；该项目仅依据校准方案 {8} "
      "个测回中的 {7} 个"),
+    (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
+     r"series; the item is not stated \((\S+) compares every condition over the same positions\)",
+     "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；该项目不予给出（{7} "
+     "要求各测量条件在相同的位置上比较）"),
 )
 
 
@@ -178,8 +199,14 @@ REASONS_ZH: tuple[tuple[str, str], ...] = (
     (r"(\S+) needs at least 2 conditions, file has only (.+)", "{1} 至少需要 2 个测量条件，文件只有 {2}"),
     (r"(\S+) needs at least 2 complete conditions", "{1} 至少需要 2 个完整的测量条件"),
     (r"no calibration position common to every condition", "各测量条件没有共同的校准位置"),
+    (r"(\S+) compares E over the same calibration positions at every condition: (.+); not "
+     r"stated from fewer conditions or positions \(read the missing position again\)",
+     "{1} 要求各测量条件在相同的校准位置上比较 E：{2}；不以较少的测量条件或位置给出结果"
+     "（请补测缺失的位置）"),
+    (r"(.+) lacks (.+) deg \((\d+) of (\d+) positions\)", "{1} 缺少 {2}°（{4} 个位置中仅有 {3} 个）"),
     (r"(\S+) deg/s, axis (\w+)", "{1} °/s，{2}轴"),
     (r"(\S+) deg/s", "{1} °/s"),
+    (r"axis (\w+)", "{1}轴"),
 )
 
 

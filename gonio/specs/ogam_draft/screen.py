@@ -31,6 +31,10 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   too), e its departure from the line its neighbours among the others draw; the rule then
   runs again on the others. A series of fewer than four readings, or with repeated
   times, uses the median rule.
+- **7.3 schedule** — each series of 7.3 holds the protocol's ``readings`` rounds, round n
+  at t_1 + (n − 1) · ``interval_s`` (t_1 the series' median of time_s − (n − 1) · interval_s) (within ``ZS_SCHEDULE_TOLERANCE``
+  of the interval): a missing round and an off-schedule reading are flagged, saying what
+  B_s rests on (the readings read, T from the first to the last).
 - **incomplete programme** — a round of 7.1, 7.4, 7.6 or 7.7 missing from every series of a
   condition present in the file, a programme condition (rate, orientation) absent, or a
   round read in some series and not in another series present, is flagged (the item is
@@ -60,18 +64,39 @@ A1_TESTS: tuple[str, ...] = ("angle_deviation", "pointing_consistency")
 #: Robust z threshold of the indicated-angle rule (1.4826·MAD estimates σ for normal data:
 #: 5 σ is a false alarm in ~6e-7 of healthy readings).
 ROBUST_Z: float = 5.0
-#: Floor of the indicated-angle rule, ″: above the spread of a healthy session on the bench
-#: (≤ 0.4″ at 60 °/s; ≤ 3″ at 1 °/s, where a six-minute turn drifts; ≤ 10″ over the 70 min
-#: of 7.3), below a typo in the hundreds of counts (100 counts = 4.7″ on an RLG of 76 435
-#: counts/°) and far below a one-degree typo (3 600″).
+#: Floor of the indicated-angle rule across the rounds of a condition (rounds read in fewer
+#: than ``PER_ROUND_MIN`` series: 7.1, and 7.6/7.7 read once) and of the 7.3 rule, ″: there
+#: a MAD of ~12 readings is too uncertain to stand alone (a 5 σ robust rule false-alarms in
+#: ~3 % of 12-reading Gaussian groups), so the floor stays above the spread of a healthy
+#: session (≤ 3″ at 1 °/s, where a six-minute turn drifts; ≤ 10″ over the 70 min of 7.3),
+#: below a typo in the hundreds of counts (100 counts = 4.7″ on an RLG of 76 435 counts/°)
+#: and far below a one-degree typo (3 600″). Rounds read in many series (7.4) have their
+#: own rule, down to the instrument's resolution (:func:`round_threshold_arcsec`).
 ANGLE_FLOOR_ARCSEC: float = 5.0
 
-#: Rounds read in at least this many series are screened round by round.
+#: Rounds read in at least this many series are screened round by round
+#: (:func:`round_threshold_arcsec`); fewer, across the rounds of the condition.
 PER_ROUND_MIN: int = 5
+#: Robust z of the round-by-round rule. Its scale is never below the condition's pooled
+#: one (:func:`round_threshold_arcsec`), so with Gaussian readings of 12 rounds × 10 series
+#: a session false-alarms in ~0.5 % at 6 (2.4 % at 5; a MAD of one round's 10 readings
+#: alone: 28 % at 6, 38 % at 5; numpy, 20 000 sessions, seed 1, quantised at one RLG count).
+ROUND_Z: float = 6.0
+#: Floor of the round-by-round rule, in steps of the column's resolution (one count of
+#: ``gyro_counts``; for ``gyro_deg`` the smallest non-zero step between two readings of a
+#: round). A round spread over a few steps has a lumpy MAD (five equal readings of ten
+#: give MAD ≤ one step whatever the spread): on the RLG bench (0.047″ a count) a clean
+#: ``typeb`` session had a reading 9 counts from its round's median, 6 · s_pooled being
+#: 8.9 counts; 10 steps (0.47″ there) keeps such readings and still sets aside two
+#: transposed digits (18 counts).
+ROUND_FLOOR_STEPS: float = 10.0
 
 CLAUSES = {"scale_factor": "7.1", "zero_stability": "7.3", "angle_deviation": "7.4",
            "rate_consistency": "7.6", "pointing_consistency": "7.7"}
 ROTATION_TESTS = ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency")
+#: The tests whose item compares conditions over the same positions (7.6, 7.7): a round
+#: missing from a condition leaves the item not measured (items.consistency_incomplete).
+COMPARED = ("rate_consistency", "pointing_consistency")
 
 _ANGLE_RULE = (f"|r − median(r of the condition)| > max({ROBUST_Z:g} · 1.4826 · MAD, "
                f"{ANGLE_FLOOR_ARCSEC:g}″), r = indicated − table angle, indicated = gyro_deg or "
@@ -261,6 +286,74 @@ def _outliers(r: np.ndarray) -> tuple[np.ndarray, float, float]:
     return np.flatnonzero(np.abs(r - med) > thr), med, thr
 
 
+def round_threshold_arcsec(r_arcsec: np.ndarray, rounds: np.ndarray, step_arcsec: float
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """The round-by-round rule of a condition whose rounds are read in many series (7.4):
+    each reading's round median and threshold, ″ (the reading is set aside when
+    ``|r − median| > threshold``).
+
+    threshold = max(``ROUND_Z`` · max(s_round, s_pooled), ``ROUND_FLOOR_STEPS`` · step),
+    s_round = 1.4826 · MAD of the round's readings, s_pooled = 1.4826 · median of every
+    reading's |r − its round's median| over the condition: the data's own spread, which a
+    round's ten readings alone estimate too loosely (one round in a session would draw a
+    small MAD), and never below a few steps of the instrument's resolution ``step_arcsec``.
+    A digit transposed in one reading (18 counts, 0.85″, where a round spreads ~0.1″) is
+    set aside; the former floor of ``ANGLE_FLOOR_ARCSEC`` let it through.
+
+    >>> r = np.array([0.0, 0.1, -0.1, 0.05, -0.05, 0.9, 0.0, 0.1, -0.1, 0.05])
+    >>> med, thr = round_threshold_arcsec(r, np.array([1] * 5 + [2] * 5), 0.047)
+    >>> [round(float(x), 3) for x in (med[0], med[5], thr[0])]
+    [0.0, 0.05, 0.47]
+    >>> np.flatnonzero(np.abs(r - med) > thr).tolist()
+    [5]
+    """
+    r = np.asarray(r_arcsec, float)
+    rounds = np.asarray(rounds)
+    med, s_round = np.empty_like(r), np.empty_like(r)
+    for rd in np.unique(rounds):
+        m = rounds == rd
+        med[m] = np.median(r[m])
+        s_round[m] = 1.4826 * np.median(np.abs(r[m] - med[m]))
+    s_pooled = 1.4826 * float(np.median(np.abs(r - med)))
+    return med, np.maximum(ROUND_Z * np.maximum(s_round, s_pooled),
+                           ROUND_FLOOR_STEPS * step_arcsec)
+
+
+def _resolution_arcsec(g: pd.DataFrame, k_ref) -> float:
+    """One step of the column the readings of ``g`` come from, ″: one count (1/K_ref) for
+    ``gyro_counts``; for ``gyro_deg`` the smallest non-zero step between two readings of a
+    round (0 where none is repeated to a step)."""
+    if (g["_col"] == "gyro_counts").all() and k_ref:
+        return deg_to_arcsec(1.0 / float(k_ref))
+    steps = [np.diff(np.unique(x)) for _, x in g.groupby("round")["_r"]]
+    steps = np.concatenate(steps) if steps else np.array([])
+    steps = steps[steps > 1e-9]
+    return float(steps.min()) if steps.size else 0.0
+
+
+def _round_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:
+    """The readings of a condition read in many series that break the round-by-round rule
+    (:func:`round_threshold_arcsec`), one finding each."""
+    med, thr = round_threshold_arcsec(g["_r"].to_numpy(float), g["round"].to_numpy(),
+                                      _resolution_arcsec(g, k_ref))
+    r = g["_r"].to_numpy(float)
+    out = []
+    for i in np.flatnonzero(np.abs(r - med) > thr):
+        row = g.iloc[i]
+        out.append(_outlier_finding(
+            row, f"indicated − table angle {r[i]:.4g}″ departs from the round's median "
+            f"{med[i]:.3g}″ by {abs(r[i] - med[i]):.4g}″ (> {thr[i]:.3g}″)",
+            what, file, test, _ROUND_RULE, k_ref))
+    return out
+
+
+_ROUND_RULE = (f"|r − median(r of the round)| > max({ROUND_Z:g} · max(s_round, s_pooled), "
+               f"{ROUND_FLOOR_STEPS:g} steps of resolution), s = 1.4826 · MAD (of the round; "
+               "pooled over the condition's rounds), r = indicated − table angle, indicated = "
+               "gyro_deg or gyro_counts / K_ref, K_ref = median(gyro_counts / table_deg) of all "
+               "rotation readings")
+
+
 def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
     """Each reading's indicated angle against what the other readings of its condition say."""
     deg = df["gyro_deg"].to_numpy(float)
@@ -280,8 +373,7 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
         if per_round.size().min() >= PER_ROUND_MIN:
             # many series: each reading against the other series of its round (an error
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
-            for _, gr in per_round:
-                out += _group_outliers(gr, key[0], what, file, k_ref)
+            out += _round_outliers(g, key[0], what, file, k_ref)
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
@@ -455,13 +547,67 @@ def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
             out += _missing_in_series(whole, test, cond, file)
             for i in missing:
                 r = it.rounds[i - 1]
+                rests = (f"the item rests on {len(it.rounds) - len(missing)} of the "
+                         f"programme's {len(it.rounds)} rounds" if test not in COMPARED else
+                         f"the item is not stated ({CLAUSES[test]} compares every condition "
+                         "over the same positions)")
                 out.append(Finding(
                     "incomplete-programme",
                     f"{test} ({CLAUSES[test]}) at {cond}: round {i} ({r.stop_deg - r.start_deg:g}°)"
-                    f" is missing from every series; the item rests on "
-                    f"{len(it.rounds) - len(missing)} of the programme's {len(it.rounds)} rounds",
+                    f" is missing from every series; {rests}",
                     "flagged", file=file, column="round", test=test, clause=CLAUSES[test],
                     rule="every programme round read in at least one series"))
+    return out
+
+
+#: A 7.3 reading more than this fraction of ``interval_s`` off the protocol's schedule
+#: (round n at the first reading's time + (n − 1) · interval_s) is flagged: a reading taken
+#: by hand a few seconds late is on schedule, one a minute late of 5 min is not.
+ZS_SCHEDULE_TOLERANCE: float = 0.1
+
+
+def zero_stability_schedule(df_all: pd.DataFrame, protocol, file) -> list[Finding]:
+    """7.3 readings against the protocol's schedule (``readings`` readings ``interval_s``
+    apart), per series of the file: a round missing (the count read of the programme's, B_s
+    over the readings read and T from the first to the last) and a reading off its time
+    (round n at t_1 + (n − 1) · interval_s within ``ZS_SCHEDULE_TOLERANCE`` · interval_s,
+    t_1 the median over the series of time_s − (n − 1) · interval_s, so that one late
+    reading, the first included, is the one flagged; used as read), flagged."""
+    z = getattr(protocol, "zero_stability", None)
+    rows = df_all[df_all["test"] == "zero_stability"]
+    if z is None or not len(rows):
+        return []
+    out = []
+    tol = ZS_SCHEDULE_TOLERANCE * z.interval_s
+    for se, g in rows.groupby("series", sort=True):
+        g = g.sort_values("time_s", kind="stable")
+        rnd = g["round"].to_numpy().astype(np.int64)
+        t = g["time_s"].to_numpy(float)
+        missing = [i for i in range(1, z.readings + 1) if i not in set(rnd.tolist())]
+        what = f"zero_stability (7.3) series {int(se)}"
+        span = float(np.nanmax(t) - np.nanmin(t)) if t.size else 0.0
+        if missing:
+            out.append(Finding(
+                "incomplete-programme",
+                f"{what}: {len(set(rnd.tolist()) & set(range(1, z.readings + 1)))} of the "
+                f"protocol's {z.readings} readings {z.interval_s:g} s apart; round(s) "
+                f"{', '.join(map(str, missing))} missing; B_s rests on the {len(g)} readings "
+                f"read, T = {span:g} s from the first to the last", "flagged", file=file,
+                column="round", test="zero_stability", clause="7.3",
+                rule=f"{z.readings} readings, rounds 1…{z.readings}"))
+        if not t.size or not np.isfinite(t).all():
+            continue
+        start = float(np.median(t - (rnd - 1) * z.interval_s))   # the schedule's round 1
+        want = start + (rnd - 1) * z.interval_s
+        for i in np.flatnonzero(np.abs(t - want) > tol):
+            out.append(Finding(
+                "off-schedule-reading",
+                f"{what} round {int(rnd[i])}: read at {t[i]:g} s, the schedule's {want[i]:g} s "
+                f"(round 1 at {start:g} s, {z.interval_s:g} s apart); used as read, "
+                f"T = {span:g} s from the first to the last reading", "flagged",
+                file=file, line=int(g["line"].iloc[i]), column="time_s",
+                test="zero_stability", clause="7.3",
+                rule=f"|time_s − schedule| ≤ {ZS_SCHEDULE_TOLERANCE:g} · interval_s"))
     return out
 
 
@@ -499,6 +645,7 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     found += _indicated_rule(df, protocol, name, k_ref, out_lines)
     gone = {f.line for f in found if f.action != "flagged"} | aside_lines
     found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]), df)
+    found += zero_stability_schedule(df, protocol, name)
     return found
 
 
