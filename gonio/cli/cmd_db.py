@@ -179,7 +179,8 @@ def hook_calibrate(sub) -> None:
                                            lab=getattr(args, "lab", None),
                                            table_calibration=getattr(
                                                args, "table_calibration", None),
-                                           actor=actor,
+                                           actor=actor, registered_gyro_type=getattr(
+                                               args, "registered_gyro_type", None),
                                            **attach_of(args))
                 line = attach_line(store, services.calibration(store, cid))
             finally:

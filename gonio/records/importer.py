@@ -4,8 +4,10 @@ ready for review, of the instrument its readings name.
 
 The readings file must be the one results.json was computed from (its SHA-256 is checked
 against ``source.sha256``): the records never hold a result without its readings. The
-folder's files must match its ``gonio-manifest.json`` (:func:`check_manifest`): a
-results.json edited after gonio wrote it is refused, nothing recorded. The
+folder's files must match its ``gonio-manifest.json`` (:func:`check_manifest`), and the
+result is computed again from the stored readings, protocol, laboratory file and table
+calibration as a records calibration is (:func:`recomputed`): an imported results.json that
+differs from what its readings give is refused, nothing recorded. The
 instrument is found by (manufacturer, model, serial) from the readings' metadata, else
 registered under the customer given (default ``(imported)``). The folder is only read.
 """
@@ -15,6 +17,8 @@ from __future__ import annotations
 import datetime as _dt
 import getpass
 import json
+import os
+import tempfile
 from pathlib import Path
 
 from sqlalchemy import select
@@ -317,8 +321,8 @@ def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
 def check_manifest(folder: Path) -> None:
     """The folder's files against its ``gonio-manifest.json`` (the SHA-256 of each file gonio
     wrote): a listed file missing or changed since, or a results.json the manifest does not
-    list, is a GonioError naming it. A folder without a manifest is not checked; a manifest
-    that cannot be read is refused."""
+    list, is a GonioError naming it. A folder without a manifest is not checked here (the
+    recomputation still is, :func:`recomputed`); a manifest that cannot be read is refused."""
     from gonio.atomic import MANIFEST
     path = folder / MANIFEST
     if not path.exists():
@@ -344,17 +348,137 @@ def check_manifest(folder: Path) -> None:
                              "is not the manifest's)", file=folder / str(name))
 
 
+def first_difference(a, b, where: str = "") -> str | None:
+    """The first place two JSON documents differ, as a dotted path with both values (short),
+    or None where they are equal (NaN equal to NaN, as JSON writes them).
+
+    >>> first_difference({"items": {"K": {"value": 1.5}}}, {"items": {"K": {"value": 1.25}}})
+    'items.K.value: 1.5 here, 1.25 recomputed'
+    >>> first_difference([1, {"a": None}], [1, {"a": None}]) is None
+    True
+    """
+    def dump(v):
+        return json.dumps(v, sort_keys=True, ensure_ascii=False)
+
+    if dump(a) == dump(b):
+        return None
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b), key=str):
+            if k not in a or k not in b:
+                return (f"{where + '.' if where else ''}{k}: "
+                        + ("absent here" if k not in a else "absent when recomputed"))
+            got = first_difference(a[k], b[k], f"{where + '.' if where else ''}{k}")
+            if got:
+                return got
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for i, (x, y) in enumerate(zip(a, b)):
+            got = first_difference(x, y, f"{where}[{i}]")
+            if got:
+                return got
+    return f"{where or '(the whole file)'}: {dump(a)[:40]} here, {dump(b)[:40]} recomputed"
+
+
+def _link_named_inputs(spec, original: Path, src: Path, work: Path) -> None:
+    """The files the readings name as part of their data (a triad's ``# thermal_readings:``,
+    ``spec.named_inputs``), relative to their folder, linked beside the stored readings in
+    ``src`` (within ``work``) from beside the ``original`` readings. They are read from the
+    folder, not stored: the records keep only the readings file itself."""
+    if spec.named_inputs is None:
+        return
+    for p in spec.named_inputs(original):
+        if p.is_absolute() and not str(p).startswith(str(original.parent) + os.sep):
+            continue                              # named by its own path: read from there
+        rel = Path(os.path.relpath(p, original.parent))
+        target = Path(os.path.normpath(src / rel))
+        if not str(target).startswith(str(work) + os.sep) or not p.is_file() \
+                or target.exists():
+            continue                              # the calibration says what is missing
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.symlink_to(p.resolve())
+
+
+def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str | None,
+               lab, tsha: str | None, tname: str, gyro_type: str | None, work: Path,
+               original_readings: Path) -> Path:
+    """The folder's result computed again into ``work``/out (returned) from the stored
+    readings (blob ``rsha``, under the name ``rd_name`` the run read it by), protocol (the
+    built-in name, else the stored file under its name), laboratory file and table
+    calibration (blob ``tsha`` under the name ``tname`` the run recorded), with the
+    registered instrument's ``gyro_type`` where the run had it (``gonio calibrate --record``)
+    and the laboratory file states none: the default options, the records' way
+    (:func:`gonio.records.compute.calibrate_folder`). The files the readings name beside
+    them (:func:`_link_named_inputs`) are read from ``original_readings``' folder."""
+    from gonio.formats.lab import naming_lab_file
+    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.records.compute import calibrate_folder
+    from gonio.specs import get
+    src = work / "in"
+    src.mkdir()
+    readings = src / rd_name
+    readings.symlink_to(blobs.blob_path(store.blob_root, rsha).resolve())
+    _link_named_inputs(get(spec_key), original_readings, src, work)
+    protocol = None
+    if proto is not None:
+        protocol = str(proto)
+        if psha is not None:
+            (work / "protocol").mkdir()
+            protocol = str(work / "protocol" / Path(proto).name)
+            Path(protocol).write_bytes(blobs.get_bytes(store.blob_root, psha))
+    table = None
+    if tsha is not None:
+        (work / "table").mkdir()
+        table = work / "table" / (tname or services.TABLE_CALIBRATION)
+        table.write_bytes(blobs.get_bytes(store.blob_root, tsha))
+    spec = get(spec_key)
+    lab_d = load_lab_file(lab, spec) if lab is not None else None
+    if ((lab_d or {}).get("instrument") or {}).get("gyro_type"):
+        gyro_type = None                         # the laboratory file's, as the run had it
+    with naming_lab_file(lab):
+        calibrate_folder(readings, work / "out", spec_key=spec_key, protocol=protocol,
+                         lab=lab, table_calibration=table if not (
+                             lab_d or {}).get("table_calibration") else None,
+                         gyro_type=gyro_type)
+    return work / "out"
+
+
+def check_recomputed(results: dict, out: Path, res_path: Path) -> None:
+    """The imported results.json against the one recomputed into ``out`` (the protocol
+    file's path, ``settings.protocol``, taken as the run named it where the SHA-256 of its
+    content, ``settings.protocol_sha256``, is the same)
+    (:func:`recomputed`): any difference is refused, naming the first (an edited number, or
+    a folder computed with other options, inputs or another gonio version: calibrate it
+    again with this gonio)."""
+    again = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    mine, theirs = again.get("settings"), results.get("settings")
+    if isinstance(mine, dict) and isinstance(theirs, dict) and "protocol" in theirs and \
+            mine.get("protocol_sha256") and \
+            mine.get("protocol_sha256") == theirs.get("protocol_sha256"):
+        # a protocol file is named by the path the run was given (resources.
+        # protocol_provenance); the recomputation reads the same bytes from elsewhere
+        mine["protocol"] = theirs["protocol"]
+    diff = first_difference(results, again)
+    if diff:
+        raise GonioError(f"results.json is not what its readings give ({diff}); nothing "
+                         "recorded: calibrate the readings again (default options, this "
+                         "gonio) and import that folder", file=res_path, key="results")
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
                          protocol: str | Path | None = None,
                          lab: str | Path | None = None,
-                         table_calibration: str | Path | None = None) -> int:
+                         table_calibration: str | Path | None = None,
+                         registered_gyro_type: str | None = None) -> int:
     """Import one output folder as a computed calibration; returns its id.
+    ``registered_gyro_type``: the registered instrument's optical-gyro type the run was given
+    (``gonio calibrate --record``), which its recomputation is given too.
 
-    The folder's files are checked against its manifest (:func:`check_manifest`): a file
-    changed since gonio wrote it is refused, nothing recorded. The result is not computed
-    again here (docs/records.md: a folder whose manifest was rewritten too is not caught).
+    The folder's files are checked against its manifest (:func:`check_manifest`) and the
+    result is computed again from what is stored (:func:`recomputed`): the imported
+    results.json must be what its readings give, byte for byte in its JSON values
+    (:func:`check_recomputed`), else nothing is recorded; the records keep the recomputed
+    results.json and summary.txt (equal to the folder's results.json by then).
 
     The protocol is stored with the readings (its file, as a blob), so that a later
     computation of the calibration uses the very protocol the result was computed with
@@ -419,16 +543,20 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
                                             table_calibration)
     check_manifest(folder)          # the folder as gonio wrote it, then what it says checked
-    return _record_import(store, folder, actor, meta, key, customer, day, rd,
-                          rsha, rsize, proto, psha, psize if psha else 0, lab, lsha, lsize,
-                          env, lab_stds, tsha, tsize, tname, res_path)
+    with tempfile.TemporaryDirectory(prefix="gonio-import-") as tmp:
+        again = recomputed(store, key, rd.name, rsha, proto, psha, lab, tsha, tname,
+                           registered_gyro_type, Path(tmp), rd)
+        check_recomputed(results, again, res_path)
+        return _record_import(store, folder, again, actor, meta, key, customer, day, rd,
+                              rsha, rsize, proto, psha, psize if psha else 0, lab, lsha, lsize,
+                              env, lab_stds, tsha, tsize, tname, res_path)
 
 
-def _record_import(store, folder, actor, meta, key, customer, day, rd, rsha, rsize,
+def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,
                    proto, psha, psize, lab, lsha, lsize, env, lab_stds, tsha, tsize, tname,
                    res_path) -> int:
     """The checked import recorded: the calibration, its standards, files and audit events in
-    one transaction, then its result (the folder's results.json and summary.txt) stored."""
+    one transaction, then its result (the recomputed folder ``again``'s files) stored."""
     try:
         os_user = getpass.getuser()
     except (KeyError, OSError):            # no name for the uid
@@ -473,7 +601,7 @@ def _record_import(store, folder, actor, meta, key, customer, day, rd, rsha, rsi
     try:
         # the result and its items as a worker's run stores them; not the command line's
         # certificate files (its number and title, no DRAFT mark: not the records' draft)
-        services.store_run(store, cal_id, folder, kept=services.KEPT_IMPORTED)
+        services.store_run(store, cal_id, again, kept=services.KEPT_IMPORTED)
     except Exception as exc:
         services.fail(store, cal_id, f"import failed: {exc}")
         raise
