@@ -20,6 +20,7 @@ KNOWN_METADATA: tuple[str, ...] = (
     "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
     "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised", "table_accel_dps2",
     "gyro_type", "sf_temperature_coeff_bound_ppm_per_c", "thermometer_mpe_c",
+    "static_record",
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability

@@ -211,7 +211,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None),
-                    extra=option_files(opts, inputs)):
+                    extra=manifest_record(spec, readings, opts, inputs, monte_carlo_trials)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
     return result, paths
 
@@ -267,3 +267,45 @@ def budget(spec_key: str, **options):
     if spec.budget is None:
         raise GonioError(f"{spec.key} has no annex budget", key="--spec")
     return spec.budget(**refuse_options(spec, options, spec.budget_options, "budget"))
+
+
+def manifest_record(spec: Specification, readings, opts: dict, inputs,
+                    monte_carlo_trials: int = 0) -> dict | None:
+    """What the manifest records of how a calibration was computed, besides the files it
+    wrote: the option files (:func:`option_files`), the other options given
+    (``calibrate_options``: ``--monte-carlo N`` where N > 0, ``--budget``, ``--robust``, the
+    instrument's ``gyro_type``; an option naming a file is among the option files, never
+    here), and the SHA-256 of each file the readings name as part of their data
+    (``named_inputs``, by the name they give it: ``Specification.named_inputs``), so that the records can compute the result again from the same inputs
+    and options (:mod:`gonio.records.importer`). None where there is nothing to record."""
+    out = dict(option_files(opts, inputs) or {})
+    files = set(out.get("option_files") or {})
+    plain = {k: v for k, v in sorted(opts.items()) if k not in files
+             and isinstance(v, (bool, int, float, str))
+             and not (isinstance(v, str) and Path(v).is_file())}
+    if monte_carlo_trials:
+        plain["monte_carlo_trials"] = int(monte_carlo_trials)
+    if plain:
+        out["calibrate_options"] = plain
+    named = named_input_digests(spec, readings)
+    if named:
+        out["named_inputs"] = named
+    return out or None
+
+
+def named_input_digests(spec: Specification, readings) -> dict:
+    """{name as the readings give it, relative to their folder: SHA-256} of the files the
+    readings name as part of their data (``spec.named_inputs``) that exist; {} where none."""
+    if spec.named_inputs is None:
+        return {}
+    base = Path(readings).parent
+    out = {}
+    for p in spec.named_inputs(readings):
+        p = Path(p)
+        if p.is_file():
+            try:
+                name = p.relative_to(base).as_posix()
+            except ValueError:
+                name = str(p)
+            out[name] = sha256_file(p)
+    return out

@@ -87,13 +87,16 @@ def write_lab_toml(lab: dict, path: str | Path) -> Path:
 def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
                      protocol: str | None = None, lab: str | Path | None = None,
                      table_calibration: str | Path | None = None,
-                     gyro_type: str | None = None) -> list[str]:
+                     gyro_type: str | None = None, options: dict | None = None) -> list[str]:
     """Calibrate ``readings`` per ``spec_key`` into ``out`` with the certificate (and the DCC
     where the specification writes one), through the one dispatch
     (:func:`gonio.pipeline.dispatch.calibrate`); ``table_calibration``: the calibration's
     stored table calibration file (its ``table_calibration`` option); ``gyro_type``: the
     optical-gyro type its ``gyro_type`` option is given (``calibrate --record``'s registered
-    instrument's, where the specification takes one); returns the file names written."""
+    instrument's, where the specification takes one); ``options``: the other options it is
+    computed with (an imported folder's, as its manifest records them:
+    :func:`gonio.records.importer.recorded_options`; None: the defaults); returns the file
+    names written."""
     from gonio.pipeline.dispatch import calibrate
     from gonio.specs import get
 
@@ -103,6 +106,7 @@ def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
     extra = {"table_calibration": str(table_calibration)} if table_calibration else {}
     if gyro_type and "gyro_type" in takes:
         extra["gyro_type"] = gyro_type
+    extra.update(options or {})
     calibrate(readings, out, spec_key=spec.key, lab=lab, dcc="dcc" in takes,
               protocol=protocol if "protocol" in takes else None,
               inputs=[readings, protocol, lab, table_calibration], **extra)

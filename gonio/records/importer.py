@@ -17,7 +17,6 @@ from __future__ import annotations
 import datetime as _dt
 import getpass
 import json
-import os
 import tempfile
 from pathlib import Path
 
@@ -318,15 +317,16 @@ def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
                    | ({"register_id": entry.id} if entry is not None else {}))
 
 
-def check_manifest(folder: Path) -> None:
+def check_manifest(folder: Path) -> dict:
     """The folder's files against its ``gonio-manifest.json`` (the SHA-256 of each file gonio
-    wrote): a listed file missing or changed since, or a results.json the manifest does not
-    list, is a GonioError naming it. A folder without a manifest is not checked here (the
-    recomputation still is, :func:`recomputed`); a manifest that cannot be read is refused."""
+    wrote), returned: a listed file missing or changed since, or a results.json the manifest
+    does not list, is a GonioError naming it. A folder without a manifest is not checked here
+    (the recomputation still is, :func:`recomputed`): {}; a manifest that cannot be read is
+    refused."""
     from gonio.atomic import MANIFEST
     path = folder / MANIFEST
     if not path.exists():
-        return
+        return {}
     try:
         man = json.loads(path.read_text(encoding="utf-8"))
         files = man["files"]
@@ -346,6 +346,7 @@ def check_manifest(folder: Path) -> None:
         if blobs_sha(p) != sha:
             raise GonioError(f"{str(name)[:80]} was changed after gonio wrote it (its SHA-256 "
                              "is not the manifest's)", file=folder / str(name))
+    return man
 
 
 def first_difference(a, b, where: str = "") -> str | None:
@@ -378,36 +379,103 @@ def first_difference(a, b, where: str = "") -> str | None:
     return f"{where or '(the whole file)'}: {dump(a)[:40]} here, {dump(b)[:40]} recomputed"
 
 
-def _link_named_inputs(spec, original: Path, src: Path, work: Path) -> None:
-    """The files the readings name as part of their data (a triad's ``# thermal_readings:``,
-    ``spec.named_inputs``), relative to their folder, linked beside the stored readings in
-    ``src`` (within ``work``) from beside the ``original`` readings. They are read from the
-    folder, not stored: the records keep only the readings file itself."""
+#: The options a folder's manifest may record (``calibrate_options``,
+#: :func:`gonio.pipeline.dispatch.manifest_record`) that its recomputation is given; any other
+#: is refused (the records would compute something else).
+RECOMPUTED_OPTIONS = ("monte_carlo_trials", "budget", "robust", "gyro_type")
+
+
+def recorded_options(man: dict, spec, res_path: Path) -> dict:
+    """The options the folder's calibration was computed with, as its manifest records them
+    (``calibrate_options``; {} where it records none: the default options), each one
+    :data:`RECOMPUTED_OPTIONS` takes and the specification takes, with a plain value (the
+    Monte Carlo trials within ``GONIO_MAX_MONTE_CARLO``). A result computed with an option
+    file other than the table calibration (``--tilt FILE``, ``--thermal FILE``: the
+    manifest's ``option_files``) cannot be computed again from what the records keep, and is
+    refused in one line, as is an option not known here: nothing recorded."""
+    from gonio.limits import check
+    from gonio.pipeline.dispatch import COMMON_CALIBRATE
+    files = sorted(k for k in (man.get("option_files") or {}) if k != "table_calibration")
+    if files:
+        raise GonioError(f"results.json was computed with --{files[0].replace('_', '-')} FILE, "
+                         "an input the records do not keep: it cannot be computed again on "
+                         "import; calibrate the readings without it (or through the records) "
+                         "and import that folder", file=res_path, key=files[0])
+    opts = man.get("calibrate_options") or {}
+    if not isinstance(opts, dict):
+        raise GonioError("the manifest's calibrate_options is not a JSON object",
+                         file=res_path.parent / "gonio-manifest.json", key="calibrate_options")
+    takes = set(spec.calibrate_options) | set(COMMON_CALIBRATE)
+    out = {}
+    for k, v in sorted(opts.items()):
+        ok = k in RECOMPUTED_OPTIONS and k in takes and (
+            isinstance(v, str) if k in ("budget", "gyro_type") else
+            isinstance(v, bool) if k == "robust" else
+            isinstance(v, int) and not isinstance(v, bool) and v >= 0)
+        if not ok:
+            raise GonioError(f"the manifest records the option {str(k)[:40]!r} = "
+                             f"{json.dumps(v)[:40]}, which a calibration cannot be computed "
+                             f"again with ({spec.key} takes "
+                             f"{', '.join(sorted(takes & set(RECOMPUTED_OPTIONS)))})",
+                             file=res_path.parent / "gonio-manifest.json",
+                             key="calibrate_options")
+        out[k] = v
+    if "monte_carlo_trials" in out:
+        check("GONIO_MAX_MONTE_CARLO", out["monte_carlo_trials"], "calibrate_options."
+              "monte_carlo_trials", unit="trials")
+    return out
+
+
+def named_inputs(spec, rd: Path, man: dict, res_path: Path) -> list[tuple[str, Path]]:
+    """The files the readings ``rd`` name as part of their data (``spec.named_inputs``: a
+    triad's ``# thermal_readings:``, the optical ``# static_record:``), as (name relative to
+    the readings' folder, path): each must lie in the readings' folder (or below it), exist,
+    and have the SHA-256 the manifest records for it (``named_inputs``, or ``files`` where
+    the readings are in the folder); else a GonioError in one line, nothing recorded. The
+    records keep them with the readings (:data:`gonio.records.services.INPUT_PREFIX`): the
+    result is computed again from them, on import and later."""
     if spec.named_inputs is None:
-        return
-    for p in spec.named_inputs(original):
-        if p.is_absolute() and not str(p).startswith(str(original.parent) + os.sep):
-            continue                              # named by its own path: read from there
-        rel = Path(os.path.relpath(p, original.parent))
-        target = Path(os.path.normpath(src / rel))
-        if not str(target).startswith(str(work) + os.sep) or not p.is_file() \
-                or target.exists():
-            continue                              # the calibration says what is missing
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.symlink_to(p.resolve())
+        return []
+    base = rd.parent.resolve()
+    listed = dict(man.get("files") or {}) if rd.parent.resolve() == res_path.parent.resolve() \
+        else {}
+    listed.update(man.get("named_inputs") or {})
+    out = []
+    for p in spec.named_inputs(rd):
+        p = Path(p)
+        try:
+            name = p.resolve().relative_to(base).as_posix()
+        except ValueError:
+            raise GonioError(f"the readings name {str(p)[:80]!r} as part of their data, outside "
+                             "their folder: the records keep a named file beside the readings "
+                             "only; put it there and name it relatively", file=rd) from None
+        if len(services.INPUT_PREFIX + name) > 64:
+            raise GonioError(f"the readings name {name[:80]!r}: a name longer than "
+                             f"{64 - len(services.INPUT_PREFIX)} characters", file=rd)
+        if not p.is_file():
+            raise GonioError(f"{name[:80]}, which the readings name as part of their data, is "
+                             "missing beside them: the result cannot be computed again; "
+                             "nothing recorded", file=rd)
+        want = listed.get(name)
+        if want and blobs_sha(p) != want:
+            raise GonioError(f"{name[:80]} is not the file the run read (its SHA-256 is not "
+                             "the manifest's)", file=p)
+        out.append((name, p))
+    return out
 
 
 def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str | None,
                lab, tsha: str | None, tname: str, gyro_type: str | None, work: Path,
-               original_readings: Path) -> Path:
+               inputs: list[tuple[str, str]] = (), options: dict | None = None) -> Path:
     """The folder's result computed again into ``work``/out (returned) from the stored
-    readings (blob ``rsha``, under the name ``rd_name`` the run read it by), protocol (the
-    built-in name, else the stored file under its name), laboratory file and table
+    readings (blob ``rsha``, under the name ``rd_name`` the run read it by) and the files
+    they name (``inputs``: (name, blob), written beside them under those names), protocol
+    (the built-in name, else the stored file under its name), laboratory file and table
     calibration (blob ``tsha`` under the name ``tname`` the run recorded), with the
-    registered instrument's ``gyro_type`` where the run had it (``gonio calibrate --record``)
-    and the laboratory file states none: the default options, the records' way
-    (:func:`gonio.records.compute.calibrate_folder`). The files the readings name beside
-    them (:func:`_link_named_inputs`) are read from ``original_readings``' folder."""
+    ``options`` the folder's manifest records (:func:`recorded_options`) and the registered
+    instrument's ``gyro_type`` where the run had it (``gonio calibrate --record``) and
+    neither those options nor the laboratory file state one, through the records' one call
+    of the pipeline (:func:`gonio.records.compute.calibrate_folder`)."""
     from gonio.formats.lab import naming_lab_file
     from gonio.pipeline.dispatch import load_lab_file
     from gonio.records.compute import calibrate_folder
@@ -416,12 +484,16 @@ def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str |
     src.mkdir()
     readings = src / rd_name
     readings.symlink_to(blobs.blob_path(store.blob_root, rsha).resolve())
-    _link_named_inputs(get(spec_key), original_readings, src, work)
+    for name, sha in inputs:
+        target = src / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(blobs.get_bytes(store.blob_root, sha))
+    from gonio.resources import protocols_dir
     protocol = None
     if proto is not None:
         protocol = str(proto)
-        if psha is not None:
-            (work / "protocol").mkdir()
+        if psha is not None and Path(proto).resolve().parent != protocols_dir().resolve():
+            (work / "protocol").mkdir()   # a built-in protocol is named as the run named it
             protocol = str(work / "protocol" / Path(proto).name)
             Path(protocol).write_bytes(blobs.get_bytes(store.blob_root, psha))
     table = None
@@ -431,13 +503,14 @@ def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str |
         table.write_bytes(blobs.get_bytes(store.blob_root, tsha))
     spec = get(spec_key)
     lab_d = load_lab_file(lab, spec) if lab is not None else None
-    if ((lab_d or {}).get("instrument") or {}).get("gyro_type"):
-        gyro_type = None                         # the laboratory file's, as the run had it
+    options = dict(options or {})
+    if gyro_type and not ((lab_d or {}).get("instrument") or {}).get("gyro_type"):
+        options.setdefault("gyro_type", gyro_type)     # calibrate --record's registered type
     with naming_lab_file(lab):
         calibrate_folder(readings, work / "out", spec_key=spec_key, protocol=protocol,
                          lab=lab, table_calibration=table if not (
                              lab_d or {}).get("table_calibration") else None,
-                         gyro_type=gyro_type)
+                         options=options)
     return work / "out"
 
 
@@ -447,7 +520,8 @@ def check_recomputed(results: dict, out: Path, res_path: Path) -> None:
     content, ``settings.protocol_sha256``, is the same)
     (:func:`recomputed`): any difference is refused, naming the first (an edited number, or
     a folder computed with other options, inputs or another gonio version: calibrate it
-    again with this gonio)."""
+    again with this gonio). Equal, the folder's results.json replaces the recomputed one in
+    ``out`` (the same values; the protocol named as the run named it)."""
     again = json.loads((out / "results.json").read_text(encoding="utf-8"))
     mine, theirs = again.get("settings"), results.get("settings")
     if isinstance(mine, dict) and isinstance(theirs, dict) and "protocol" in theirs and \
@@ -459,8 +533,11 @@ def check_recomputed(results: dict, out: Path, res_path: Path) -> None:
     diff = first_difference(results, again)
     if diff:
         raise GonioError(f"results.json is not what its readings give ({diff}); nothing "
-                         "recorded: calibrate the readings again (default options, this "
-                         "gonio) and import that folder", file=res_path, key="results")
+                         "recorded: calibrate the readings again (with this gonio) and "
+                         "import that folder", file=res_path, key="results")
+    # equal in every value: the folder's own bytes are kept (they name the protocol file by
+    # the path the run was given, not the recomputation's temporary one)
+    (out / "results.json").write_bytes(res_path.read_bytes())
 
 
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
@@ -477,8 +554,8 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     The folder's files are checked against its manifest (:func:`check_manifest`) and the
     result is computed again from what is stored (:func:`recomputed`): the imported
     results.json must be what its readings give, byte for byte in its JSON values
-    (:func:`check_recomputed`), else nothing is recorded; the records keep the recomputed
-    results.json and summary.txt (equal to the folder's results.json by then).
+    (:func:`check_recomputed`), else nothing is recorded; the records keep the folder's
+    results.json (equal in every value to the recomputed one) and the recomputed summary.txt.
 
     The protocol is stored with the readings (its file, as a blob), so that a later
     computation of the calibration uses the very protocol the result was computed with
@@ -542,21 +619,28 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
     tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
                                             table_calibration)
-    check_manifest(folder)          # the folder as gonio wrote it, then what it says checked
+    man = check_manifest(folder)    # the folder as gonio wrote it, then what it says checked
+    options = recorded_options(man, get(key), res_path)
+    inputs = [(name, *blobs.put_file(store.blob_root, p))
+              for name, p in named_inputs(get(key), rd, man, res_path)]
     with tempfile.TemporaryDirectory(prefix="gonio-import-") as tmp:
         again = recomputed(store, key, rd.name, rsha, proto, psha, lab, tsha, tname,
-                           registered_gyro_type, Path(tmp), rd)
+                           registered_gyro_type, Path(tmp),
+                           [(n, sha) for n, sha, _ in inputs], options)
         check_recomputed(results, again, res_path)
         return _record_import(store, folder, again, actor, meta, key, customer, day, rd,
                               rsha, rsize, proto, psha, psize if psha else 0, lab, lsha, lsize,
-                              env, lab_stds, tsha, tsize, tname, res_path)
+                              env, lab_stds, tsha, tsize, tname, res_path, inputs, options)
 
 
 def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,
                    proto, psha, psize, lab, lsha, lsize, env, lab_stds, tsha, tsize, tname,
-                   res_path) -> int:
-    """The checked import recorded: the calibration, its standards, files and audit events in
-    one transaction, then its result (the recomputed folder ``again``'s files) stored."""
+                   res_path, inputs=(), options=None) -> int:
+    """The checked import recorded: the calibration, its standards, files (the files the
+    readings name, ``inputs``: (name, sha256, size), kept under
+    :data:`~gonio.records.services.INPUT_PREFIX`) and audit events (the ``options`` it was
+    computed with named) in one transaction, then its result (the recomputed folder
+    ``again``'s files) stored."""
     try:
         os_user = getpass.getuser()
     except (KeyError, OSError):            # no name for the uid
@@ -564,7 +648,7 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
     who = actor.username if actor else f"command line ({os_user})"
     with store.writing() as s:
         for sha, size in ((rsha, rsize), (psha, psize), (lsha, lsize),
-                          (tsha, tsize)):
+                          (tsha, tsize), *((i[1], i[2]) for i in inputs)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
                 s.flush()
@@ -593,7 +677,12 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
             raise GonioError(exc.message, file=rd, key=exc.key) from None
         services.audit(s, actor, "import", "calibration", cal.id, None,
                        dict(services.state(cal), folder=str(folder), os_user=os_user,
-                            standards=services.standard_names(s, cal.id)))
+                            standards=services.standard_names(s, cal.id),
+                            options=dict(options or {}),
+                            inputs={n: sha for n, sha, _ in inputs}))
+        for name, sha, _ in inputs:          # the files the readings name, kept with them
+            s.add(CalibrationFile(calibration_id=cal.id, name=services.INPUT_PREFIX + name,
+                                  sha256=sha))
         if tsha is not None:        # the table calibration the run used, kept
             _keep_table_calibration(s, cal, actor, tsha, tname, res_path)
         s.commit()

@@ -690,6 +690,33 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
 #: stored at creation; sealed with the run's files).
 TABLE_CALIBRATION = "table_calibration.csv"
 
+#: The prefix of the names a calibration's other input files are kept under among its files:
+#: each file its readings name as part of their data (a triad's thermal readings, the optical
+#: static record), ``input/`` + the name the readings give it (stored at import; sealed with
+#: the run's files): a result is computed again from what is stored.
+INPUT_PREFIX = "input/"
+
+
+def write_inputs(store, cal_id: int, folder: Path) -> list[str]:
+    """The calibration's stored input files (:data:`INPUT_PREFIX`, each checked against its
+    digest) written into ``folder`` under the names its readings give them, for a run of the
+    readings placed there; their names (none: [])."""
+    with store.session() as s:
+        rows = s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
+            CalibrationFile.calibration_id == int(cal_id),
+            CalibrationFile.name.startswith(INPUT_PREFIX))).all()
+    names = []
+    for name, sha in sorted(rows):
+        rel = name[len(INPUT_PREFIX):]
+        target = Path(folder) / rel
+        if ".." in Path(rel).parts or Path(rel).is_absolute():
+            raise GonioError(f"the stored input {name!r} is not a name inside the readings' "
+                             "folder", key=f"calibration {cal_id}")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(file_bytes(store, sha))
+        names.append(rel)
+    return names
+
 
 def table_calibration_of(spec, lab: dict, lab_name: str, sha256: str | None,
                          day: _dt.date) -> None:

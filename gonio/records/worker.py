@@ -62,6 +62,8 @@ def _compute(store, cal, work) -> None:
     services.set_progress(store, cal.id, "preparing the readings")
     data = services.file_bytes(store, cal.readings_sha256)
     readings = work / ("readings" + readings_suffix(data[:4]))
+    if services.write_inputs(store, cal.id, work / "in"):   # the files the readings name
+        readings = work / "in" / readings.name
     readings.write_bytes(data)
     del data
     protocol = cal.protocol or None

@@ -266,7 +266,9 @@ class Specification:
         reader refuses an unknown column itself.
     named_inputs : callable or None
         (readings path) → the other files the readings name as part of their data (inputs
-        no output may replace).
+        no output may replace; the manifest records their SHA-256, ``named_inputs``, and
+        the records keep them with the readings, so that a result is computed again from
+        what is stored).
     read_table_calibration : callable or None
         (path) → the rotary table's calibration read from a table-calibration file, every
         fault a GonioError in one line; what the records check a file with before they

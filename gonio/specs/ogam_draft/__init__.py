@@ -39,6 +39,7 @@ SPEC = Specification(
     calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
     screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
     readings_columns=lazy("gonio.specs.ogam_draft.readings:read_columns"),
+    named_inputs=lazy("gonio.specs.ogam_draft.static_record:named_inputs"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),

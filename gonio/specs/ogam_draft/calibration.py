@@ -2355,8 +2355,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     or ``"draft"`` (the annex's four lines only). ``tilt``: a ``gonio tilt-estimate
     --json`` result (path or dict) bounding the tilt instead of the protocol's bound.
     The zero-stability result (7.3) comes with the Allan analysis of the instrument's
-    record over the 7.3 rest when there is one: cut from the stream, or given as
-    ``static_record`` (the virtual bench's). ``zero_stability``: which reading of B_s is
+    record over the 7.3 rest when there is one: cut from the stream, given as
+    ``static_record`` (the virtual bench's), or the static record file the readings name
+    (``# static_record:``, :func:`~gonio.specs.ogam_draft.static_record.named_static_record`). ``zero_stability``: which reading of B_s is
     stated, ``"draft"`` (default) or ``"model"`` (:func:`zero_stability_readings`).
     ``findings``: the screening of these readings already made (``SPEC.screen``, the
     pipeline's first step), applied as given; None: screened here. ``gyro_type``: the
@@ -2383,6 +2384,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
         sha = sha256_file(readings)
+    if static_record is None:        # the file the readings name (the demo writes one)
+        from gonio.specs.ogam_draft.static_record import named_static_record
+        static_record = named_static_record(rd.path, rd.metadata)
     settings, more = session_settings(rd, proto)
     conflicts += more
     if table_calibration is not None:

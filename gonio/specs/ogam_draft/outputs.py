@@ -189,12 +189,32 @@ def write_calibration(result: Result, out: str | Path,
     return names
 
 
+def _with_static_record_file(session, stage: Path):
+    """``session`` whose readings name the static record file (``# static_record:``) written
+    into ``stage`` from its record (:func:`gonio.specs.ogam_draft.static_record.
+    static_record_text`, decimated as the noise analysis decimates); the session as it is
+    where it captured no record."""
+    import dataclasses
+
+    from gonio.specs.ogam_draft.calibration import ZERO_STABILITY_NOISE_SAMPLES
+    from gonio.specs.ogam_draft.static_record import FILE_NAME, METADATA_KEY, static_record_text
+
+    rec = session.static_record
+    if rec is None or rec.counts is None:
+        return session
+    write_text(Path(stage) / FILE_NAME, static_record_text(rec, ZERO_STABILITY_NOISE_SAMPLES))
+    return dataclasses.replace(session, metadata={**session.metadata, METADATA_KEY: FILE_NAME})
+
+
 def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: str = "en",
          dcc: bool = True, force: bool = False, inputs=(), on_stage=None,
          protocol: str = "ogam-draft") -> tuple[Result, dict[str, Path]]:
     """Simulate ``protocol`` on ``bench``, calibrate the readings (with the session's static
-    record for the Allan analysis of 7.3), write results, certificate and (``dcc``) the DCC
-    XML. ``lab``: a loaded laboratory dict (or a file).
+    record for the Allan analysis of 7.3, written beside them as ``static_record.csv`` and
+    named by their ``# static_record:`` line, :func:`_with_static_record_file`: the folder is
+    what ``gonio calibrate readings.csv`` gives, so the records can compute it again from
+    its files), write results, certificate and (``dcc``) the DCC XML. ``lab``: a loaded
+    laboratory dict (or a file).
 
     The whole set (readings.csv, truth.json, results, tables, certificate, DCC, manifest)
     is staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`); an
@@ -215,10 +235,10 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
     with output_set(out, inputs=inputs, force=force) as stage:
         say("demo: simulating the session on the virtual bench")
         session = run_session(proto, bench_cfg, seed=seed)
+        session = _with_static_record_file(session, stage)
         write_session(session, out)
         say("demo: calibrating")
-        result = decide_conformity(calibrate(stage / "readings.csv", proto,
-                                  static_record=session.static_record), lab)
+        result = decide_conformity(calibrate(stage / "readings.csv", proto), lab)
         write_calibration(result, out, lab=lab)
         say("demo: writing the certificate")
         write_certificate(result.to_json(), out, truth=session.truth, lab=lab, lang=lang,

@@ -46,13 +46,19 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
     """Simulate the triad protocol on the bench (readings.csv with the alignment session,
     thermal.csv with the chamber programme, truth.json) and calibrate it with
     ``monte_carlo_trials`` Monte Carlo draws, the whole set staged and swapped into ``out``
-    together (:func:`gonio.atomic.output_set`). ``lab``: a loaded laboratory dict."""
+    together (:func:`gonio.atomic.output_set`; its manifest records ``monte_carlo_trials`` as
+    ``calibrate_options``, :func:`gonio.pipeline.dispatch.manifest_record`). ``lab``: a loaded
+    laboratory dict."""
     from gonio.specs.triad_alignment import SPEC
     from gonio.specs import decide_conformity
     from gonio.specs.triad_alignment.simulate import simulate
 
     inputs = [x for x in inputs if Path(x).exists()]
-    with output_set(out, inputs=inputs, force=force) as stage:
+    # the options it calibrates with, recorded as gonio calibrate records them: the folder
+    # can be computed again from its files (gonio db import)
+    extra = {"calibrate_options": {"monte_carlo_trials": int(monte_carlo_trials)}} \
+        if monte_carlo_trials else None
+    with output_set(out, inputs=inputs, force=force, extra=extra) as stage:
         sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
         result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)

@@ -632,7 +632,8 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     static = None
     if "zero_stability" in run.records:
         t, c = run.records["zero_stability"]
-        static = StaticRecord(t, c / bench.instrument.nominal_scale_factor_counts_per_deg)
+        k = bench.instrument.nominal_scale_factor_counts_per_deg
+        static = StaticRecord(t, c / k, counts=c, nominal_scale_factor_counts_per_deg=k)
     return SessionResult(df, session_metadata(protocol, bench, seed), truth, static)
 
 
