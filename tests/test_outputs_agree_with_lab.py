@@ -285,10 +285,40 @@ def test_conformity_is_declared_as_decided(issued):
                 r = c["guard_factor"]
                 assert lo == pytest.approx(r * (c["value"] - it["uncertainty"]["interval"][0]),
                                            rel=1e-9)
-                assert f"guard bands {lo:.2g} at the lower limit, " \
-                       f"{c['guard_band']:.2g} at the upper" in line, line
+                assert f"guard bands {sig2(lo)} at the lower limit, " \
+                       f"{sig2(c['guard_band'])} at the upper" in line, line
             elif c.get("guard_band"):
-                assert f"guard band {c['guard_band']:.2g})" in line, line
+                assert f"guard band {sig2(c['guard_band'])})" in line, line
+            # the limits as the laboratory gave them (the lab file's text), never %g-rounded
+            want = {"lower": None, "upper": None}
+            for k_, v_ in CASES[issued["spec"]][1]:
+                if k_ == key:
+                    for part in v_.split("\n"):
+                        name, val = (x.strip() for x in part.split("="))
+                        val = val[:-2] if val.endswith(".0") else val   # 60.0 is 60
+                        if name == "mpe":
+                            want = {"lower": "-" + val, "upper": val}
+                        else:
+                            want[name] = val
+            lims = (f"[{want['lower']}, {want['upper']}]" if want["lower"] and want["upper"]
+                    else f"≤ {want['upper']}" if want["upper"] else f"≥ {want['lower']}")
+            assert f"{key}: limits {lims} (" in line, (line, lims)
+
+
+def sig2(x: float) -> str:
+    """Two significant digits, half up, written as the certificate writes a number (an
+    independent writer: Decimal's own quantize, × 10 powers by hand)."""
+    from decimal import ROUND_HALF_UP, Decimal
+
+    d = Decimal(repr(float(x)))
+    q = d.quantize(Decimal(1).scaleb(d.adjusted() - 1), rounding=ROUND_HALF_UP)
+    if q.adjusted() < -4:
+        m, e = f"{q:e}".split("e")
+        m = m.rstrip("0").rstrip(".")
+        sup = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+        return f"{m}×10{str(int(e)).translate(sup)}"
+    t = f"{q:f}"
+    return t.rstrip("0").rstrip(".") if "." in t else t
 
 
 def test_the_legend_names_each_interval_and_its_clauses(issued):

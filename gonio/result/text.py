@@ -7,7 +7,7 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 from __future__ import annotations
 
 from gonio.formats.provenance import result_provenance
-from gonio.result.statement import item_statement
+from gonio.result.statement import decimals_for_sig, given_text, item_statement, round_half_up
 
 #: summary.txt's first line for readings from the virtual bench (their own metadata say so).
 VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings name the "
@@ -35,22 +35,46 @@ def item_text(it) -> str:
     return item_statement(it.to_json()).text()        # as results.json states it (ν_eff ∞: null)
 
 
+def band_text(w: float) -> str:
+    """A guard band as summary.txt prints it: two significant digits (half up), in the
+    certificate's number form (never "1.2e-05").
+
+    >>> band_text(1.234e-5), band_text(0.0456), band_text(1234.5), band_text(90.0)
+    ('1.2×10⁻⁵', '0.046', '1200', '90')
+    """
+    return given_text(float(round_half_up(float(w), decimals_for_sig(float(w), 2))))
+
+
+def limits_text(lower, upper) -> str:
+    """The limits as the laboratory gave them, in the certificate's form (:func:`given_text`:
+    never rounded, one minus sign): "[lo, hi]", "≤ hi" or "≥ lo".
+
+    >>> limits_text(-1000.0, 1000.0), limits_text(None, 76434.86), limits_text(-0.5, None)
+    ('[-1000, 1000]', '≤ 76434.86', '≥ -0.5')
+    """
+    if lower is None:
+        return f"≤ {given_text(upper)}"
+    if upper is None:
+        return f"≥ {given_text(lower)}"
+    return f"[{given_text(lower)}, {given_text(upper)}]"
+
+
 def conformity_text(c) -> str:
-    """One conformity decision as a line."""
-    lo = "−∞" if c.lower is None else f"{c.lower:g}"
-    hi = "+∞" if c.upper is None else f"{c.upper:g}"
+    """One conformity decision as a line (limits and guard bands as :func:`limits_text` and
+    :func:`band_text` print them)."""
+    lims = limits_text(c.lower, c.upper)
     if c.outcome is None:
-        return f"{c.item}: limits [{lo}, {hi}] ({c.rule}): no decision: {c.reason}"
+        return f"{c.item}: limits {lims} ({c.rule}): no decision: {c.reason}"
     pc = "" if c.conformance_probability is None else \
         f", probability of conformance {100 * c.conformance_probability:.3g} %"
     if c.conformance_probability is None and (c.probability_model or "").startswith("not given"):
         pc = f", probability {c.probability_model}"
-    gb = "" if not c.guard_band else f", guard band {c.guard_band:.2g}"
+    gb = "" if not c.guard_band else f", guard band {band_text(c.guard_band)}"
     if c.guard_band and getattr(c, "guard_band_lower", None) is not None:
         # an interval not symmetric about its value: its own reach on each side
-        gb = f", guard bands {c.guard_band_lower:.2g} at the lower limit, " \
-             f"{c.guard_band:.2g} at the upper"
-    return f"{c.item}: limits [{lo}, {hi}] ({c.rule}{gb}): {c.outcome}{pc}"
+        gb = f", guard bands {band_text(c.guard_band_lower)} at the lower limit, " \
+             f"{band_text(c.guard_band)} at the upper"
+    return f"{c.item}: limits {lims} ({c.rule}{gb}): {c.outcome}{pc}"
 
 
 def summary_lines(result) -> list[str]:
