@@ -165,6 +165,33 @@ def test_proceeding_states_the_contradiction(run):
     assert serial in (cal / "certificate.html").read_text(encoding="utf-8")
     summary = (cal / "summary.txt").read_text(encoding="utf-8")
     assert f"say '{serial}'" in summary and LAB_SERIAL in summary
+    # no empty clause before the message ("[flagged] : serial: …")
+    assert "] :" not in text and "] :" not in (cal / "certificate.html").read_text(
+        encoding="utf-8")
+
+
+def test_the_dcc_states_every_finding_the_certificate_states(run, dcc_schema):
+    """The DCC certifies nothing the certificate qualifies silently: one dcc:statement per
+    finding stated (all but "refused"), the identity contradiction among them naming both
+    serials, in a schema-valid place (DCC 3.3.0 XSD)."""
+    from lxml import etree
+
+    from gonio.report.dcc import DCC_NS
+
+    spec, seed, cal = run
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    stated = [f for f in res["findings"] if f["action"] != "refused"]
+    dcc = cal / "certificate.dcc.xml"
+    dcc_schema.validate(str(dcc))
+    root = etree.parse(str(dcc)).getroot()
+    sts = [s for s in root.iter(f"{{{DCC_NS}}}statement")
+           if (s.get("id") or "").startswith("finding-")]
+    assert len(sts) == len(stated), (len(sts), len(stated))
+    texts = [" ".join(c.text for c in s.iter(f"{{{DCC_NS}}}content")) for s in sts]
+    serial = res["metadata"]["serial"]
+    assert any(f"say '{serial}'" in t and LAB_SERIAL in t for t in texts), texts
+    for f in stated:                       # each finding's own message, in English
+        assert any(f["message"] in t for t in texts), f["message"]
 
 
 def test_virtual_readings_marked_everywhere_with_a_lab_file(run):

@@ -53,7 +53,7 @@ from lxml import etree
 
 from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
-from gonio.report.i18n import display, labels
+from gonio.report.i18n import display, finding_text, labels
 from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
 from gonio.result.statement import DSI_UNITS
 
@@ -323,14 +323,17 @@ def new_document() -> "etree.Element":
 def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm: str,
                         clauses: list[str], readings_taken: list[str],
                         readings_name: str | None = None,
-                        provenance: dict | None = None) -> "etree.Element":
+                        provenance: dict | None = None,
+                        findings=None) -> "etree.Element":
     """dcc:administrativeData shared by every specification's DCC: the software, core data
     (identifier, dates, place), the item, laboratory, responsible persons, customer and the
     statements: the specification followed (``norm``, the ``clauses`` calibrated), the place
     of calibration as the laboratory file gives it, the virtual-bench notice and one statement per reading taken (already in English; named
     ``readings_name``, default "Readings taken of the specification's text"). The virtual-bench statement
     is made where the readings' ``provenance`` (or ``md``) say virtual, whatever ``lab`` holds.
-    Returns the dcc:statements element (a specification adds its own statements)."""
+    ``findings``: results.json's screening findings, each one the certificate states (all
+    but "refused", the identity and other whole-file findings first) as a statement
+    (:func:`finding_statements`). Returns the dcc:statements element (a specification adds its own statements)."""
     from gonio import __version__
 
     L = labels("en")
@@ -426,11 +429,28 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
             text_element(st, "dcc:name", L["virtual"])
             text_element(st, "dcc:declaration", line)
     record_statements(sts, lab, L)
+    finding_statements(sts, findings, L)
     for i, note in enumerate(readings_taken, 1):
         st = element(sts, "dcc:statement", id=f"reading-taken-{i}")
         text_element(st, "dcc:name", readings_name or L["readings_taken_std"])
         text_element(st, "dcc:declaration", note)
     return sts
+
+
+def finding_statements(sts, findings, L: dict) -> None:
+    """One dcc:statement (dcc:name, dcc:declaration: :func:`gonio.report.i18n.finding_text`,
+    the certificate's line) per screening finding the certificate states: a serial the
+    readings contradict where the laboratory chose to proceed, readings set aside, planned
+    points missing, conditions dropped, a sparse temperature log interpolated. A DCC that
+    certifies without them would say less than the certificate."""
+    from gonio.result.findings import WHOLE_FILE_CODES
+
+    found = sorted((f for f in findings or () if f.get("action") != "refused"),
+                   key=lambda f: f.get("code") not in WHOLE_FILE_CODES)
+    for i, f in enumerate(found, 1):
+        st = element(sts, "dcc:statement", id=f"finding-{i}")
+        text_element(st, "dcc:name", L.get("screening_h", "Screening of the readings"))
+        text_element(st, "dcc:declaration", finding_text(f, L))
 
 
 def record_statements(sts, lab: dict | None, L: dict) -> None:

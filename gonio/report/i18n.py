@@ -845,6 +845,9 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
     >>> table = [(r"(\\w+) round (\\d+) is missing", "{1} 第 {2} 测回缺失")]
     >>> finding_text(f, labels("zh"), table, extra={"bias": "零偏"})
     '[标记] 6.2，round 列：零偏 第 3 测回缺失'
+    >>> finding_text({"action": "flagged", "message": "serial: the readings say 'A'"},
+    ...              labels("en"))
+    "[flagged] serial: the readings say 'A'"
     """
     zh = L.get("_lang") == "zh"
     act = FINDING_ACTIONS.get(f.get("action"), (f.get("action"),) * 2)[1 if zh else 0]
@@ -857,4 +860,6 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
     if zh:
         msg = translator(extra, COMMON_FINDINGS_ZH + tuple(table), own)(msg) or msg
     where = ("，" if zh else ", ").join(p for p in parts if p)
+    if not where:               # a finding of no clause, column or line (the identity's)
+        return f"[{act}] {msg}"
     return f"[{act}] {where}{'：' if zh else ': '}{msg}"

@@ -87,7 +87,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
     norm = (content_field(data, "NORM") or (spec.title_en,))[0]
     root = new_document()
     sts = administrative_data(root, md, lab, cert_id=cert_id, norm=norm,
-                              provenance=res.get("provenance"),
+                              provenance=res.get("provenance"), findings=res.get("findings"),
                               clauses=list(dict.fromkeys(it["clause"] for it in items.values()
                                                          if it["measured"])),
                               readings_taken=list(res.get("readings_taken", [])),

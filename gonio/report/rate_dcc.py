@@ -163,7 +163,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
     items = res["items"]
     root = new_document()
     sts = administrative_data(
-        root, md, lab, cert_id=cert_id, norm=spec.title_en, provenance=res.get("provenance"),
+        root, md, lab, cert_id=cert_id, norm=spec.title_en, provenance=res.get("provenance"), findings=res.get("findings"),
         clauses=[it["clause"] for it in items.values() if it["measured"]],
         readings_taken=list(res.get("readings_taken", [])),
         readings_name="Reading taken of the specification's text")

@@ -54,7 +54,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
     root = new_document()
     norm = specification_text(followed(res) or "not stated", "en")
     sts = administrative_data(
-        root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"),
+        root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"), findings=res.get("findings"),
         clauses=[res["items"][n]["clause"] for n in item_names(res)
                  if res["items"][n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])],
