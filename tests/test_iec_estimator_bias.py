@@ -256,3 +256,33 @@ def test_startup_correction_never_below_zero():
     b, c = startup_curvature_corrected_s(130.0, TAU_S / BAND_DPS, BAND_DPS, var)
     assert b == pytest.approx(TAU_S * var / (2 * BAND_DPS ** 2)) and c == pytest.approx(130 - b)
     assert startup_curvature_corrected_s(2.0, TAU_S / BAND_DPS, BAND_DPS, var) == (2.0, 0.0)
+
+
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_certificate_prints_the_standards_reading_beside_the_corrected_estimate(calibrated, lang):
+    """5.1.3.7 and 5.3.3.9 certify corrected estimates; the standard's own readings (max δ_i,
+    the mean last-exceedance time without the correction) are printed beside them, labelled
+    the standard's and not certified, as the Result words them (en and zh), and are the
+    details' numbers (computed here from the per-rate spreads and per-record times)."""
+    from gonio.report.i18n import labels
+    from gonio.report.rate_certificate import rate_certificate_blocks
+
+    res = calibrated.to_json()
+    sf, st = (res["items"][k]["details"] for k in ("sf_stability", "startup_time"))
+    assert sf["standard_reading"]["value"] == max(sf["delta_by_rate"].values())
+    assert st["standard_reading"]["value"] == pytest.approx(float(np.mean(st["last_exceedance_s"])))
+    assert st["standard_reading"]["value"] != pytest.approx(res["items"]["startup_time"]["value"])
+    blocks = rate_certificate_blocks(calibrated, labels(lang), lang, lab=None)["blocks"]
+    text = " ".join(str(b.data) for b in blocks)
+    mark = "仅并列给出，不作校准结果" if lang == "zh" else "given beside, not certified"
+    more = [(res["items"][k]["details"], c, v) for k, c, v in
+            (("bias_instability", "5.4.5.3", "floor_reading_dph"),
+             ("bias_hysteresis", "5.3.3.7", "reading_iec_dps"))
+            if res["items"].get(k, {}).get("measured")]
+    for d, _, v in more:
+        assert d["standard_reading"]["value"] == d[v]
+    for d, clause in [(sf, "5.1.3.7"), (st, "5.3.3.9")] + [m[:2] for m in more]:
+        line = d["standard_reading"]["text_" + lang]
+        assert line in text and mark in line and line.startswith(clause)
+        assert d["standard_reading"]["stated"] in line
+        assert ("标准的读数" if lang == "zh" else "the standard's reading") in line

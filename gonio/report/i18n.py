@@ -201,9 +201,10 @@ LABELS: dict[str, dict[str, str]] = {
                            "求得），对各点真值的任何分布形态均成立（而非单点的 max|x_i| ± k·u）"},
     "k_iv_sel_max": {"en": "the largest of several standard deviations by its χ² interval with "
                            "the selection bias of the maximum removed (the midpoint of its "
-                           "bounds) and the interval widened by those bounds",
+                           "bounds) and the interval widened by those bounds, its upper end "
+                           "at least every record's own χ² upper bound at its own ν",
                      "zh": "若干标准偏差中的最大者给出其 χ² 区间：扣除取最大值的选择偏差（取其界限的"
-                           "中点），区间按该界限加宽"},
+                           "中点），区间按该界限加宽，上端不低于各记录按其自身 ν 的 χ² 上限"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},

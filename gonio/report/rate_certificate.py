@@ -277,6 +277,13 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     legend = interval_legend(res["items"], L)    # stated by an interval: say what each is
     if legend:
         add("p", [legend])
+    # the standard's own reading beside a corrected estimate, as the Result words it
+    for _, _, _, keys in data.GROUPS:
+        for key in keys:
+            it = res["items"].get(key) or {}
+            beside = (it.get("details") or {}).get("standard_reading")
+            if it.get("measured") and isinstance(beside, dict):
+                add("p", [beside["text_zh" if lang == "zh" else "text_en"]])
     blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
     blocks += conformity_section(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])

@@ -39,7 +39,7 @@ READINGS_TAKEN = (
     "5.3.3.6: least-squares slope through every visit of base → max → base → min → base.",
     "5.4.5.2: slope −½ line fitted where the local slope is −½ ± 0.1, read at 1 h.",
     "5.4.5.3: floor over τ with ≥ 10 clusters, divided by √(2 ln 2/π) (the standard's reading, "
-    "in the details); the value is that reading less the rule's bias under the record's fitted "
+    "given beside the results, not certified); the value is that reading less the rule's bias under the record's fitted "
     "noise model (other noise terms at the floor τ, minimum over τ), stated by the 95 % "
     "interval of that rule's distribution (2.5 % each side; no k).",
     "5.5: band = the lower of the −3 dB and the 90° lag frequencies, both reported.",
@@ -48,17 +48,21 @@ READINGS_TAKEN = (
     "5.3.3.3: the bias of each supply run is its rest output (null included); R in %, the "
     "departure in output units (Table 4's V) in the details.",
     "5.3.3.7: a visit is 'up' when reached from below, 'down' from above; hysteresis = "
-    "max |B_up − B_down| (the reading, in the details); stated as that reading less the "
+    "max |B_up − B_down| (the reading, given beside the results, not certified); stated as that reading less the "
     "midpoint of a maximum's selection excess, with the interval [0, its one-sided 95 % upper limit].",
     "5.1.3.7: the standard's reading is max δ_i, the largest population spread at the "
-    "constant rates (in the details); the value is the estimate of the largest true spread "
+    "constant rates (given beside the results, not certified); the value is the estimate of "
+    "the largest true spread "
     "max σ_i: that reading less the bias of a maximum (the midpoint between Jensen's alone and "
     "the contending rates' full selection excess, scaled χ), stated by its 95 % interval (the "
-    "χ² interval of the largest spread united over that excess; no k).",
+    "upper end the largest of every record's own χ² upper bound at its own ν, the lower end "
+    "no higher than the largest spread's χ² lower bound over that excess; no k).",
     "5.3.3.9: the reference output is the mean of the record's last fifth; the standard's "
-    "reading (the last excursion beyond the band) is in the details; the value is the time "
+    "reading (the last excursion beyond the band) is given beside the results, not "
+    "certified; the value is the time "
     "outside the band (smoothed values beyond it × their step) less its late bias where the "
-    "transient flattens, t''·var/2 (first-order transient).",
+    "transient flattens, t''·var/2 (first-order transient; only for a record that leaves "
+    "the band, and never below 0 s; a record always within the band is 0 s).",
     "5.3.3.8: a = g cos γ with γ = 0 at input axis up (eq (28)'s sin γ counts from the "
     "horizontal); the Earth rate removed at each angle; a whole turn in equal steps.",
     "5.4.5.1 c): broadband = rms over band_hz … broadband_high_hz of the one-sided density; the "

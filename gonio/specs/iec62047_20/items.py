@@ -546,7 +546,14 @@ def sf_stability(ctx: Context) -> Item:
                 details={"delta_by_rate": deltas, "full_scale": fs,
                          "reading_max_delta": est["reading"], "reading_rate_dps": r,
                          "max_bias": est["bias"], "max_bias_bounds": list(est["bias_bounds"]),
-                         "contenders": est["contenders"], "samples_by_rate": sizes})
+                         "contenders": est["contenders"], "samples_by_rate": sizes,
+                         "standard_reading": standard_reading_beside(
+                             "5.1.3.7", est["reading"], "",
+                             ("the standard's reading max δ_i = {v} (the largest population "
+                              "spread at the constant rates; reads high by the selection of "
+                              "a maximum)", "the estimate of the largest true spread max σ_i"),
+                             ("标准的读数 max δ_i = {v}（各恒定角速率下总体标准偏差的最大值；"
+                              "因取最大值而偏高）", "最大真实分散值 max σ_i 的估计"))})
 
 
 def sf_temperature(ctx: Context) -> Item:
@@ -980,6 +987,11 @@ def bias_instability(ctx: Context) -> Item:
     return Item("bias_instability", t, cl, un, value, uncertainty=u, details={
         "tau_floor_s": float(allan.tau_s[i]), "fit": fit.to_dict(),
         "floor_reading_dph": val, "floor_rule_bias_dph": val - value,
+        "standard_reading": standard_reading_beside(
+            "5.4.5.3", val, " °/h",
+            ("the standard's reading, the Allan-deviation floor / 0.664, {v}",
+             "that reading less the floor rule's bias"),
+            ("标准的读数（Allan 偏差底值 / 0.664）{v}", "该读数减去底值规则的偏差")),
         "floor_rule_slope": slope, "interval_dph": [lo, hi],
         "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev, "ci_low": allan.ci_low,
                   "ci_high": allan.ci_high}})
@@ -1540,8 +1552,38 @@ def startup_time(ctx: Context) -> Item:
                 details={"per_record_s": v, "band_dps": band,
                          "last_exceedance_s": np.array([r["last_exceedance_s"] for r in recs]),
                          "count_s": count, "curvature_bias_s": corr,
+                         "standard_reading": standard_reading_beside(
+                             "5.3.3.9", float(np.mean([r["last_exceedance_s"] for r in recs])),
+                             " s",
+                             ("the standard's reading, the last excursion beyond the band, "
+                              "{v} (mean of %d records; without the curvature correction)"
+                              % len(recs), "the time outside the band less its late bias"),
+                             ("标准的读数（最后一次超出带宽的时间）{v}（%d 次记录的平均值；"
+                              "未作曲率修正）" % len(recs), "带外时间减去其滞后偏差")),
                          "u_per_record_s": np.array(us),
                          "spread_s": float(v.std(ddof=1)) if v.size > 1 else None})
+
+
+def standard_reading_beside(clause: str, value: float, unit_text: str, en: tuple[str, str],
+                            zh: tuple[str, str]) -> dict:
+    """The standard's own reading of an item whose certified value is a corrected estimate,
+    decided once here for the certificate to print beside the results (labelled the
+    standard's, not certified; as the optical draft's E reading beside its interval):
+    ``value`` (in the item's unit), ``stated`` (3 significant digits), and the sentence in
+    English and Chinese (``en``/``zh``: (the reading with ``{v}``, what is certified)).
+
+    >>> standard_reading_beside("5.3.3.9", 141.25, " s", ("the standard's reading {v}", "x"),
+    ...                         ("标准的读数 {v}", "x"))["text_en"]
+    "5.3.3.9: the standard's reading 141 s; given beside, not certified (certified: x)."
+    """
+    v = float(value)
+    stated = (np.format_float_positional(v, precision=3, unique=False, fractional=False,
+                                         trim="-") if math.isfinite(v) else "—") + unit_text
+    return {"clause": clause, "value": v, "stated": stated,
+            "text_en": f"{clause}: {en[0].format(v=stated)}; given beside, not certified "
+                       f"(certified: {en[1]}).",
+            "text_zh": f"{clause}：{zh[0].format(v=stated)}；仅并列给出，不作校准结果"
+                       f"（校准结果：{zh[1]}）。"}
 
 
 def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: float,
@@ -1885,7 +1927,12 @@ def bias_hysteresis(ctx: Context) -> Item:
     val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: visit_drift_u_dps(ctx, sep))
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
         "up_minus_down_dps": diffs, "temperature_c": Tm,
-        "reading_iec_dps": max(abs(v) for v in diffs.values())})
+        "reading_iec_dps": max(abs(v) for v in diffs.values()),
+        "standard_reading": standard_reading_beside(
+            "5.3.3.7", max(abs(v) for v in diffs.values()), " °/s",
+            ("the standard's reading max |B_up − B_down| = {v}",
+             "that reading less the midpoint of a maximum's selection excess"),
+            ("标准的读数 max |B_up − B_down| = {v}", "该读数减去最大值选择超出量的中点"))})
 
 
 def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
