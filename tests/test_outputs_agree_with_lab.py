@@ -372,3 +372,21 @@ def test_items_csv_nu_is_the_stated_nu(issued):
         elif got:
             want = math.inf if nu > NU_INFINITE else float(max(1, math.floor(nu)))
             assert float(got) == want, (key, got, nu)
+
+
+def test_dcc_coverage_probability_is_the_stated_one(issued):
+    """si:coverageProbability is the p the certificate states ("p ≈ 98 %" is 0.98, never the
+    computed 0.9823487503232564): at most the digits p_text keeps (its 3 decimals in per cent)
+    and within a stated rounding step of a p results.json holds."""
+    from decimal import Decimal
+
+    ps = [u["coverage_probability"] for it in measured(issued["res"]).values()
+          if (u := it.get("uncertainty")) and u.get("coverage_probability") is not None]
+    for lang in ("en", "zh"):
+        root = issued["out"][lang]["dcc"]
+        for e in root.iter(f"{{{SI_NS}}}coverageProbability",
+                           f"{{{SI_NS}}}coverageProbabilityXMLList"):
+            for t in e.text.split():
+                d = Decimal(t)
+                assert -d.as_tuple().exponent <= 5, t          # 99.999 % at most
+                assert any(abs(float(d) - p) <= 0.01 for p in ps), (t, ps)

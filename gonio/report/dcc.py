@@ -154,14 +154,28 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
         mu = element(element(r, "si:measurementUncertaintyUnivariate"), "si:expandedMU")
         element(mu, "si:valueExpandedMU", dsi_decimal(str(U)))
         element(mu, "si:coverageFactor", dsi_decimal(str(k)))
-        element(mu, "si:coverageProbability", repr(float(p)))
+        element(mu, "si:coverageProbability", stated_p(p))
     elif interval is not None and u_std is not None and p is not None:
         ci = element(element(r, "si:measurementUncertaintyUnivariate"), "si:coverageIntervalMU")
         element(ci, "si:valueStandardMU", dsi_decimal(u_std))
         element(ci, "si:intervalMin", dsi_decimal(interval[0]))
         element(ci, "si:intervalMax", dsi_decimal(interval[1]))
-        element(ci, "si:coverageProbability", repr(float(p)))
+        element(ci, "si:coverageProbability", stated_p(p))
     return r
+
+
+def stated_p(p) -> str:
+    """A coverage probability as the certificate states it (:func:`~gonio.result.statement.
+    p_text`: "p ≈ 98 %" is 0.98 in the DCC, never 0.9823487503232564; 0.9545 stays 0.9545).
+
+    >>> stated_p(0.9823487503232564), stated_p(0.95), stated_p(0.9545), stated_p(0.99998)
+    ('0.98', '0.95', '0.9545', '0.99998')
+    """
+    from decimal import Decimal
+
+    from gonio.result.statement import p_text
+
+    return str(Decimal(p_text(float(p))).scaleb(-2))
 
 
 def value_in_interval(value: str, interval: tuple[str, str]) -> tuple[str, bool]:

@@ -25,7 +25,7 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (administrative_data, conformity_statements,
+from gonio.report.dcc import (administrative_data, stated_p, conformity_statements,
                               element, measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
@@ -160,7 +160,7 @@ def matrix_result(results, name: str, keys: list[str], items: dict,
                                                               for n in ns))
             element(mu, "si:coverageFactorXMLList", " ".join(dsi_decimal(str(n["k"]))
                                                              for n in ns))
-            element(mu, "si:coverageProbabilityXMLList", " ".join(repr(float(p)) for p in ps))
+            element(mu, "si:coverageProbabilityXMLList", " ".join(stated_p(p) for p in ps))
 
 
 def item_dcc_bytes(result, *, lab: dict | None = None, cert_id: str, data=None,
