@@ -259,7 +259,11 @@ def test_items_csv_states_the_certificates_numbers(demo):
             continue
         assert pd.isna(row["interval_low"]) and pd.isna(row["interval_high"]), key
         assert row["U"] == pytest.approx(u["U"]) and row["k"] == pytest.approx(u["k"]), key
-        if pd.isna(row["nu"]):      # k did not come from a ν: no t-factor of any ν
+        if pd.isna(row["nu"]) and u["nu_eff"] is None:
+            # an infinite ν_eff, stored null: no ν stated (the certificate's "—"), k the
+            # normal quantile
+            assert u["k"] == pytest.approx(stats.norm.ppf(0.5 + p / 2), rel=1e-6), key
+        elif pd.isna(row["nu"]):    # k did not come from a ν: no t-factor of any ν
             nu = u["nu_eff"]
             nu_s = math.inf if nu is None or nu > 1000 else max(1, math.floor(nu))
             assert not math.isclose(u["k"], stats.t.ppf(0.5 + p / 2, nu_s), rel_tol=1e-6), key
