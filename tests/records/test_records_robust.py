@@ -210,6 +210,39 @@ def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, comput
     assert "key metadata.date: 9999-12-31 is in the future" in err
 
 
+def test_import_without_a_manifest_refused(tmp_path, capsys, computed_folder, bench_readings):
+    """gonio-manifest.json deleted and results.json edited (K by 2 ppm): refused by the
+    recomputation on import, one line, exit 2, nothing recorded; the same folder with its
+    manifest back and results.json as gonio wrote it imports (so the refusal is the edit's)."""
+    import json
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    man = (folder / "gonio-manifest.json").read_bytes()
+    original = (folder / "results.json").read_bytes()
+    (folder / "gonio-manifest.json").unlink()
+    doc = json.loads(original)
+    doc["items"]["scale_factor"]["value"] *= 1 + 2e-6
+    (folder / "results.json").write_text(json.dumps(doc, indent=2), encoding="utf-8")
+    data = tmp_path / "data"
+    args = ["db", "import", folder, "--data", data, "--protocol", SMALL_PROTOCOL,
+            "--readings", bench_readings[0]]
+    err = cli(args, capsys)
+    assert "scale_factor" in err and "recomputed" in err      # the recomputation refuses it
+    (folder / "results.json").write_bytes(original)
+    (folder / "gonio-manifest.json").write_bytes(man)
+    assert cli(args, capsys, 0) == ""
+    from gonio.records.db import open_store
+    from gonio.records.models import Calibration
+    st = open_store(None, data)
+    try:
+        with st.session() as s:                 # the refused import recorded nothing
+            assert s.query(Calibration).count() == 1
+    finally:
+        st.close()
+
+
 def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # noqa: F811
     """A calibration dated 9999-12-31 (refused at entry, but possible in an old database) no
     longer makes the overview, the due lists and the history plot answer 500: its due date
