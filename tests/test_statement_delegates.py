@@ -16,7 +16,7 @@ from gonio.report.i18n import (coverage_text, display, display_number, display_u
                                parse_display)
 from gonio.report.stated import item_nums
 from gonio.specs.ogam_draft.stated import stated_item
-from gonio.result.statement import item_statement, k_text, p_text, rounded, state
+from gonio.result.statement import item_statement, k_text, p_relation, p_text, rounded, state
 
 finite = st.floats(min_value=-1e20, max_value=1e20, allow_nan=False, allow_infinity=False)
 positive = st.floats(min_value=1e-12, max_value=1e12, allow_nan=False, allow_infinity=False)
@@ -115,7 +115,8 @@ def test_item_displays_agree(value, U, k, p):
         assert str(n["U"]) == st_.U_text == str(s["U"])
         assert str(n["k"]) == k_text(k) == display("k", k) == str(s["k"])
         assert n["p"] == p_text(p) == s["p"]
-        assert coverage_text(p).endswith(f" {p_text(p)} %")
+        assert coverage_text(p) == (f"{p_text(p)} %" if p_relation(p_text(p)) == "="
+                                    else f"approximately {p_text(p)} %")
 
 
 @pytest.mark.parametrize("x,sig,text", [
@@ -148,8 +149,8 @@ def test_p_is_stated_the_same_everywhere():
     from a distribution keeps two significant digits."""
     from decimal import Decimal
     assert p_text(0.9545) == "95.45" and Decimal(p_text(0.9545)) / 100 == Decimal("0.9545")
-    assert coverage_text(0.9545) == "approximately 95.45 %"
-    assert coverage_text(0.9545, "zh") == "约 95.45 %"
+    assert coverage_text(0.9545) == "95.45 %" and coverage_text(0.95) == "approximately 95 %"
+    assert coverage_text(0.9545, "zh") == "95.45 %"
     assert p_text(0.95) == "95" and p_text(0.99) == "99" and p_text(0.9973) == "99.73"
     assert p_text(0.9946477675623514) == "99" and p_text(0.981526203417951) == "98"
 

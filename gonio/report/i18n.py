@@ -26,7 +26,7 @@ from decimal import Decimal
 
 from gonio.errors import GonioError
 from gonio.result.statement import (decimals_at_U, decimals_for_sig, k_text, nu_text,  # noqa: F401
-                                    p_text, round_half_up, state)
+                                    p_relation, p_text, round_half_up, state)
 # (the one rule: gonio.result.statement)
 
 #: Languages the certificate can be written in.
@@ -568,12 +568,17 @@ def coverage_text(p: float | None, lang: str = "en") -> str:
     :func:`~gonio.result.statement.p_text` states it (0.9545: "95.45", as results.json and
     the DCC carry it).
 
+    A p chosen as such (:func:`~gonio.result.statement.p_relation` "="), 0.9545, is stated
+    as it is: "95.45 %".
+
     >>> coverage_text(0.95), coverage_text(0.9545, "zh"), coverage_text(None)
-    ('approximately 95 %', '约 95.45 %', '—')
+    ('approximately 95 %', '95.45 %', '—')
     """
     if p is None:
         return "—"
     pct = p_text(p)
+    if p_relation(pct) == "=":
+        return pct + " %"
     return ("约 " if lang == "zh" else "approximately ") + pct + " %"
 
 
@@ -712,13 +717,13 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     (r"(.+) in results\.json, written per m s⁻² \(g_n = (\S+) m s⁻²\)",
      "results.json 中为 {1}，此处按每 m s⁻² 给出（g_n = {2} m s⁻²）"),
     # an item's statement by its interval (gonio.result.statement.Statement.text's forms)
-    (r"upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ≈ (\S+) %\); the estimate fell "
-     r"below zero", "上限：≤ {1}（区间 [0, {2}]，p ≈ {3} %）；估计值低于零"),
+    (r"upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ([≈=]) (\S+) %\); the estimate fell "
+     r"below zero", "上限：≤ {1}（区间 [0, {2}]，p {3} {4} %）；估计值低于零"),
     (r"upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\]\); the estimate fell below zero",
      "上限：≤ {1}（区间 [0, {2}]）；估计值低于零"),
-    (r"(.+); upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ≈ (\S+) %\)",
-     "{1}；上限：≤ {2}（区间 [0, {3}]，p ≈ {4} %）"),
-    (r"(.+); interval \[([^\]]+)\](.*?) \(p ≈ (\S+) %\)", "{1}；区间 [{2}]{3}（p ≈ {4} %）"),
+    (r"(.+); upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ([≈=]) (\S+) %\)",
+     "{1}；上限：≤ {2}（区间 [0, {3}]，p {4} {5} %）"),
+    (r"(.+); interval \[([^\]]+)\](.*?) \(p ([≈=]) (\S+) %\)", "{1}；区间 [{2}]{3}（p {4} {5} %）"),
     (r"Produced by gonio from a virtual bench \(simulated readings\)\. It demonstrates the "
      r"layout and the computations only; it certifies nothing about any instrument\. "
      r"Performance dates are the placeholder (\S+)\.",

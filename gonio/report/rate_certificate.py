@@ -27,7 +27,7 @@ from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf_figures
 from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums
 from gonio.result.findings import WHOLE_FILE_CODES
-from gonio.result.statement import unit_text
+from gonio.result.statement import p_relation, unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import figures_of
 from gonio.specs import content_field, get
@@ -161,14 +161,15 @@ def component_source(c: dict, L: dict, phrases=()) -> str:
 
 
 def factors_cell(n: dict, L: dict) -> list:
-    """"k = 1.97, ν_eff = 168, p ≈ 95 %" of one item as text and Num segments."""
+    """"k = 1.97, ν_eff = 168, p ≈ 95 %" of one item as text and Num segments (a chosen p,
+    95.45 %, with "=": :func:`gonio.result.statement.p_relation`)."""
     seg: list = []
     if n["k"] is not None:
         seg += ["k = ", n["k"]]
     if n["nu"] is not None:
         seg += [", " if seg else "", "ν_eff = ", n["nu"]]
     if n["p"] is not None:
-        seg += [", " if seg else "", f"p ≈ {n['p']} %"]
+        seg += [", " if seg else "", f"p {p_relation(n['p'])} {n['p']} %"]
     return seg or ["—"]
 
 

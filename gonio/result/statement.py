@@ -281,6 +281,23 @@ def nu_text(nu: float | None) -> str | None:
 P_TEXT_MAX_DECIMALS: int = 3
 
 
+#: The coverage probabilities a procedure chooses exactly as the p of a normal distribution's
+#: k = 2 and k = 3 (EA-4/02 Annex E's t-factor tables): stated "p = 95.45 %", since the k are
+#: computed for that p (t_0.9545(ν)); any other p is stated "p ≈ …" (JCGM 100 6.2.2: an
+#: interval of about that coverage; the rate specifications' 95 %, a computed probability).
+CHOSEN_P_TEXTS = ("95.45", "99.73")
+
+
+def p_relation(p: str | None) -> str:
+    """The relation sign a stated coverage probability (its :func:`p_text`) is printed with:
+    "=" for a p chosen as such (:data:`CHOSEN_P_TEXTS`), else "≈".
+
+    >>> p_relation("95.45"), p_relation("95"), p_relation("99.7")
+    ('=', '≈', '≈')
+    """
+    return "=" if p in CHOSEN_P_TEXTS else "≈"
+
+
 def p_text(p: float | None) -> str | None:
     """A coverage probability (a fraction) in per cent, as every output states it.
 
@@ -454,7 +471,7 @@ class Statement:
         if self.nu_eff is not None:
             parts.append(f"ν_eff = {self.nu_eff}")
         if self.p is not None:
-            parts.append(f"p ≈ {self.p} %")
+            parts.append(f"p {p_relation(self.p)} {self.p} %")
         return ", ".join(parts)
 
     def bound_text(self, lang: str = "en") -> str:
@@ -472,7 +489,7 @@ class Statement:
             return ""
         u = f" {self.unit}" if self.unit else ""
         lo, hi = (self._x(x) for x in self.interval)
-        p = f"p ≈ {self.p} %" if self.p is not None else ""
+        p = f"p {p_relation(self.p)} {self.p} %" if self.p is not None else ""
         if short:
             iv = f"≤ {hi}" if self.upper is not None else f"[{lo}, {hi}]"
             return iv + ((f"（{p}）" if lang == "zh" else f" ({p})") if p else "")

@@ -38,11 +38,11 @@ TEXT = {
     "h_alignment": ("Alignment matrix", "对准矩阵"),
     "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
                        "from {n} dwells{robust}; each cell value ± U (k = …), U = k·u for a "
-                       "coverage probability of approximately " + P_STATED + " %, k = t(ν) of the element's own budget "
+                       "coverage probability p = " + P_STATED + " %, k = t(ν) of the element's own budget "
                        "(the fit and the rate table, ν by Welch–Satterthwaite; ν in the "
                        "uncertainty table below).",
                        "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
-                       "由 {n} 个测量段{robust}求得；各格为 值 ± U（k = …），U = k·u，包含概率约 "
+                       "由 {n} 个测量段{robust}求得；各格为 值 ± U（k = …），U = k·u，包含概率 p = "
                        + P_STATED + " %，k 按各元素自身预算（拟合与转台，ν 按 Welch–Satterthwaite 公式）的"
                        "自由度 ν 取 t 分布因子（ν 见下方不确定度表）。"),
     "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
@@ -92,7 +92,7 @@ TEXT = {
     "bound_tag": ("bound condition", "界限条件"),
     "bound_note": ("Two statements of the items the rate table enters (M, S, L and K(ϑ, U)): U "
                    "of JCGM 100 (the table's errors as distributions, u_c and k = t(ν_eff); it "
-                   "holds approximately " + P_STATED + " % over their distribution) and the bound-condition U (the "
+                   "holds p = " + P_STATED + " % over their distribution) and the bound-condition U (the "
                    "table's errors at their bounds — rate error at {rate_bound} relative, the "
                    "certificate's expanded uncertainty, every axis component at ±{bound}° — in "
                    "their worst combination, a, plus k·u of the fit: U = a + k·u; it holds with "
@@ -100,7 +100,7 @@ TEXT = {
                    "U (bound) here and in the cross-axis table, for K(ϑ, U) in results.json). This "
                    "certificate certifies {which} (the protocol's uncertainty_statement).",
                    "受速率转台影响的项（M、S、L 及 K(ϑ, U)）有两种表述：JCGM 100 的 U（转台误差按其"
-                   "分布处理，u_c 与 k = t(ν_eff)；在其分布上包含概率约 " + P_STATED + " %），以及界限条件 U（转台"
+                   "分布处理，u_c 与 k = t(ν_eff)；在其分布上包含概率 p = " + P_STATED + " %），以及界限条件 U（转台"
                    "误差取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
                    "±{bound}°——按最不利组合线性合成为 a，加上拟合的 k·u：U = a + k·u；在界限内任一"
                    "转台误差下包含概率均不低于此值；见本表及交叉轴表的“界限条件 U”列，K(ϑ, U) 的见 "
@@ -139,13 +139,13 @@ TEXT = {
                     "supply V (ϑ: the reading of the gyro's sensor there, relative to {tref} °C, "
                     "at which the model is evaluated), ARW(ϑ) at each set point; each cell "
                     "value ± U with its own k = t(ν_eff) for a coverage probability of "
-                    "approximately " + P_STATED + " %. U includes the fit, the "
+                    "p = " + P_STATED + " %. U includes the fit, the "
                     "model order (the spread of the candidate orders' values at the point) and "
                     "the temperature reading; the bias is {bias}. The polynomial coefficients "
                     "below are information, not certified values.",
                     "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
                     "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
-                    " 值 ± U，各自的 k = t(ν_eff)，包含概率约 " + P_STATED + " %。U 含拟合、模型阶次（各候选阶次"
+                    " 值 ± U，各自的 k = t(ν_eff)，包含概率 p = " + P_STATED + " %。U 含拟合、模型阶次（各候选阶次"
                     "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
     "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
                        "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
@@ -187,7 +187,7 @@ TEXT = {
 READINGS_TAKEN_ZH = (
     "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
     "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
-    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率约 " + P_STATED + " %；运行了试验时旁列蒙特卡洛法"
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 p = " + P_STATED + " %；运行了试验时旁列蒙特卡洛法"
     "（JCGM 101）标准不确定度。",
     "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
     "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",

@@ -128,7 +128,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
         k = total_coverage_factor(u, u_b, nu_min)
         return with_k(value * factor, k * u * factor, k)
 
-    out = [f"<h2>Alignment matrix (U for p ≈ {p_text(COVERAGE)} %, every cell with the k of its own "
+    out = [f"<h2>Alignment matrix (U for p = {p_text(COVERAGE)} %, every cell with the k of its own "
            "budget, t(ν_eff): the fit and the rate table)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
@@ -168,7 +168,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
     out.append("<p>Bound-condition statement beside the GUM's (the rate table's errors at "
                "their bounds — rate error at its certificate's expanded uncertainty, every "
                "axis component at the fixture's bound — in their worst combination, a, plus "
-               f"k·u of the fit: U = a + k·u; at least the same p ≈ {p_text(COVERAGE)} % at every table error "
+               f"k·u of the fit: U = a + k·u; at least the same p = {p_text(COVERAGE)} % at every table error "
                "within the bounds, where the GUM's U holds over their distribution). Which of the two a "
                "certificate certifies is the protocol's <code>[alignment] "
                "uncertainty_statement</code> (default gum); this page: "
