@@ -150,10 +150,39 @@ def test_damaged_readings_give_items_not_measured_with_the_reason(run, tmp_path,
         lines[k] = ",".join(cells)
         return lines, k + 1
     line = _damaged(src, tmp_path / "swapped.csv", swap_sign)
+    # as the rate specifications treat a typo: the dwell set aside, named, the rest
+    # calibrated; M and b as from the same file with that dwell deleted (a second route)
+    capsys.readouterr()
+    assert main(["calibrate", str(tmp_path / "swapped.csv"), "--out", str(tmp_path / "sw")]) == 0
+    err = capsys.readouterr()
+    assert f"set aside: {tmp_path / 'swapped.csv'} line {line}" in err.out + err.err
+    res = json.loads((tmp_path / "sw" / "results.json").read_text())
+    (f,) = [f for f in res["findings"] if f["action"] == "set_aside"]
+    assert f["line"] == line and "sign" in f["message"]
+    lines = (tmp_path / "swapped.csv").read_text().splitlines(keepends=True)
+    (tmp_path / "deleted.csv").write_text("".join(lines[:line - 1] + lines[line:]))
     from gonio.specs import get
-    r = get("triad-alignment").calibrate(tmp_path / "swapped.csv")
-    it = r.items["M_xx"]
-    assert not it.measured and f"line {line}" in it.reason and "sign" in it.reason
+    ref = get("triad-alignment").calibrate(tmp_path / "deleted.csv")
+    for key in ("M_xx", "M_yz", "b_x", "b_z"):
+        it = res["items"][key]
+        assert it["measured"] and it["value"] == ref.items[key].value, key
+        assert it["uncertainty"]["U"] == pytest.approx(ref.items[key].uncertainty.U, rel=1e-12)
+    assert ref.items["M_xx"].value != pytest.approx(run["res"]["items"]["M_xx"]["value"],
+                                                    rel=1e-15, abs=0)  # the dwell counts
+
+    def two_typos(lines):             # two dwells' signs flipped: refused, naming a line
+        lines, _ = swap_sign(lines)
+        head = next(i for i, s in enumerate(lines) if s.startswith("test,"))
+        cells = lines[head + 6].split(",")
+        cells[6] = str(-float(cells[6]))
+        lines[head + 6] = ",".join(cells)
+        return lines, 0
+    _damaged(src, tmp_path / "two.csv", two_typos)
+    capsys.readouterr()
+    assert main(["calibrate", str(tmp_path / "two.csv"), "--out", str(tmp_path / "tw")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gonio: error: ") and err.count("\n") == 1 and "set aside" in err
+    assert not (tmp_path / "tw").exists()
 
     def drop_z(lines):                # no rotation about z: M's third column undetermined
         return [s for s in lines if not (s.startswith("alignment,") and ",+z," in s
@@ -338,17 +367,18 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
     assert ps == {0.9545}, ps                       # the p the k were computed for
     stated = "95.45"
     text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
-    assert f"approximately {stated} %" in text
-    assert not re.search(r"(approximately|≈|约) 95 %", text)
+    # p is chosen (the k are t for it): "p = 95.45 %", never "approximately 95.45 %"
+    assert f"p = {stated} %" in text
+    assert not re.search(r"(approximately|≈|约) ?95(\.45)? %", text)
     summary = (run["dir"] / "cal" / "summary.txt").read_text(encoding="utf-8")
-    assert f"p ≈ {stated} %" in summary and not re.search(r"≈ 95 %", summary)
+    assert f"p = {stated} %" in summary and not re.search(r"≈ ?95(\.45)? %", summary)
     dcc = run["dir"] / "cal" / "certificate.dcc.xml"
     if dcc.exists():
         got = set(re.findall(r"<si:coverageProbability>([^<]*)<", dcc.read_text(encoding="utf-8")))
         assert got and {float(x) for x in got} == {float(stated) / 100}, got
     from gonio.specs.triad_alignment.certificate import READINGS_TAKEN_ZH, TEXT
     zh = " ".join(READINGS_TAKEN_ZH) + " ".join(v[1] for v in TEXT.values())
-    assert f"约 {stated} %" in zh and not re.search(r"约 ?95 %", zh)
+    assert f"p = {stated} %" in zh and not re.search(r"约 ?95(\.45)? %", zh)
 
 
 def test_bias_monte_carlo_is_of_the_same_long_term_quantity_as_the_gum(run):

@@ -64,7 +64,7 @@ READINGS_TAKEN = (
     "axis and the static positions), the Earth rate of every orientation averaged over the "
     "swept table angle; for one ± pair it reduces to the article's difference formula.",
     "Uncertainties: Type A from the fit residuals, k = t(ν), coverage probability "
-    "approximately " + p_text(COVERAGE) + " %; the Monte Carlo "
+    "p = " + p_text(COVERAGE) + " %; the Monte Carlo "
     "(JCGM 101) standard uncertainty is given beside it when trials were run.",
     "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
     "uncertainty is what the alignment leaves.",
@@ -415,6 +415,48 @@ def _alignment_not_measured(reason: str, unit: str) -> dict[str, Item]:
     return out
 
 
+def fit_setting_aside(r: TriadReadings, *, robust: bool, monte_carlo: int, seed,
+                      target_deg) -> tuple[AlignmentResult, TriadReadings, list]:
+    """The alignment fit (:func:`fit_alignment`) of dwells consistent with one M and b
+    (:func:`consistency_check`), as the rate specifications treat a reading that departs from
+    its segment (a typo: set aside, named, the rest calibrated, ``_rate_family.screening``):
+    where the check names one dwell, that dwell is set aside (a ``set_aside`` finding naming
+    its line) and the rest fitted and checked again. Refused (GonioError naming the line, the
+    CLI's exit 2): dwells still inconsistent, or not fitted, with that one set aside — never
+    a certificate whose M, b, S and L are "not measured" for a typo. A fit that fails naming
+    no line (a programme that cannot determine M, e.g. no rotation about z) is raised as it
+    is (the caller states M and b not measured). ``robust``: no check (the robust fit
+    down-weights such a dwell itself). Returns (fit, readings used, findings)."""
+    import dataclasses
+
+    from gonio.result.findings import Finding
+
+    def fit(rr):
+        al = fit_alignment(rr, robust=robust, monte_carlo=monte_carlo, seed=seed,
+                           target_deg=target_deg)
+        if not robust:
+            consistency_check(al, rr)
+        return al
+
+    try:
+        return fit(r), r, []
+    except GonioError as exc:
+        if robust or exc.line is None:
+            raise
+        first = exc
+    d = r.data
+    kept = dataclasses.replace(r, data=d[~((d["test"] == "alignment") & (d["line"] == first.line))]
+                               .reset_index(drop=True))
+    try:
+        al = fit(kept)
+    except GonioError as exc:
+        raise GonioError(f"{first.message}; with line {first.line} set aside the rest are "
+                         f"still refused: {exc.message}", file=r.path, line=first.line) from None
+    return al, kept, [Finding("dwell-inconsistent", f"{first.message} — set aside; M and b "
+                              "fitted from the other dwells", "set_aside", file=r.path,
+                              line=first.line, test="alignment")]
+
+
 def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
     """GonioError when the fit's residual noise is more than :data:`CONSISTENCY_RATIO` times
     what the dwells' own sample deviations give (sd/√n): one M and b cannot explain the
@@ -659,16 +701,18 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     items: dict[str, Item] = {}
     al = None
     if (r.data["test"] == "alignment").any():
-        try:
-            al = fit_alignment(r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
-                               target_deg=target_deg)
-            if not robust:
-                consistency_check(al, r)
+        try:        # one inconsistent dwell is set aside; a dwell refused stops here (exit 2)
+            al, r, aside = fit_setting_aside(r, robust=robust, monte_carlo=monte_carlo_trials,
+                                             seed=seed, target_deg=target_deg)
         except GonioError as exc:
-            al = None
+            if exc.line is not None:
+                raise
+            al = None         # a programme that cannot determine M and b (no line to name)
             items.update(_alignment_not_measured(f"the data were refused: {exc.message}", unit))
         else:
-            items.update(alignment_items(al, monte_carlo_trials, static_record_s(r), statement))
+            findings = list(findings) + aside
+            items.update(alignment_items(al, monte_carlo_trials, static_record_s(r),
+                                         statement))
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
