@@ -366,6 +366,12 @@ def dcc_translator(result, content_fn):
         lambda k: band_unit(res["items"][k])) for lg in ("en", "zh")}
     if band["en"]:
         extra[band["en"]] = band["zh"]
+    # each screening finding the DCC states (gonio.report.dcc.finding_statements): the
+    # certificate's own Chinese line (screening_blocks)
+    phrases = content_field(data, "PHRASES_ZH")
+    for f in res.get("findings") or ():
+        if f.get("action") != "refused":
+            extra[finding_text(f, labels("en"))] = finding_text(f, labels("zh"), phrases)
     # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
     own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
     return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")))

@@ -524,6 +524,11 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
                          **{k: L[k] for k in item_names(results) if k in L},
                          method_text(results, lab_d, "en"): method_text(results, lab_d, "zh"),
                          **description_zh(results, lab_d)}
+                names = {k: L[k] for k in item_names(results) if k in L}
+                for f in results.get("findings") or ():   # the DCC's finding statements
+                    if f["action"] != "refused":
+                        extra[finding_text(f, labels("en", LABELS))] = finding_text(
+                            f, L, FINDINGS_ZH + REASONS_ZH, extra=names, own=LABELS)
                 doc = bilingual(doc, label_translator(extra, REASONS_ZH, LABELS))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
