@@ -12,7 +12,7 @@ from sqlalchemy.orm import joinedload, selectinload
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
                                   Certificate, Customer, Instrument, ResultItem, Standard,
                                   TableCalibration, User)
-from gonio.records.results import statements_of, stored_result
+from gonio.records.results import conformity_of, statements_of, stored_result
 
 
 def _page(s, stmt, page: int, size: int):
@@ -96,7 +96,9 @@ def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``stated``: each item's statement
     (:func:`gonio.records.results.stated_items`, from the sealed result only, which is read
     once for the page), ``shown``: its one line as the page prints it (each negative number
-    with U+2212, as the certificate), ``virtual``: the virtual-bench mark
+    with U+2212, as the certificate), ``conformity``: the stored decisions as the certificate
+    states them (:func:`gonio.records.results.conformity_of`, from the same sealed result),
+    ``virtual``: the virtual-bench mark
     (:func:`virtual_mark`) or "", ``identity``: the contradictions between the readings and
     the laboratory file the run proceeded with (:func:`identity_findings`); ``place`` is the
     place of calibration as the certificate states it (the one entered, else the laboratory's); ``missing``: what it
@@ -149,6 +151,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
+            "conformity": conformity_of(doc if sealed else None),
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
             "table_calibration": table_calibration_used(table_sha, doc, table_name),
             "file_names": {TABLE_CALIBRATION: table_name} if table_sha else {},

@@ -240,3 +240,71 @@ def max_abs_keys(store, results_sha256: str) -> frozenset:
 
 
 _MAX_ABS: dict[tuple[str, str], frozenset] = {}
+
+
+# ------------------------------------------------ the stored decisions as the certificate states them
+
+
+def conformity_of(doc, lang: str = "en") -> dict:
+    """The statement of conformity of the results.json ``doc`` as the certificate states it,
+    for a page: ``rules`` (the decision rule's paragraph of each rule used), ``rows`` (one per
+    item with a stored decision, ``items.<key>.conformity``, in the result's order: ``key``,
+    ``title``, ``limits``, ``acceptance``, ``guard_band``, ``outcome``, ``pc``, ``pfa``) and
+    ``notes`` (the guard band of an item decided on its interval, the items with no
+    probability). The texts are the certificate's
+    (:func:`gonio.report.stated.conformity_blocks`: limits as given, the acceptance interval
+    as decided and rounded once in the Result, the outcome) and the guard band as
+    ``summary.txt`` prints it (:func:`gonio.result.text.band_text`, with its lower band where
+    the interval is not symmetric); each negative number with U+2212. A pure function of the
+    stored result: nothing is decided or computed again; no decision, no rows.
+
+    >>> doc = {"items": {"B": {"title": "Bias", "unit": "deg/h", "value": 1.0,
+    ...     "conformity": {"item": "B", "U": 0.2, "lower": -1.0, "upper": 1.0,
+    ...         "rule": "simple", "guard_band": 0.0, "acceptance_lower": -1.0,
+    ...         "acceptance_upper": 1.0, "outcome": "pass", "accepted": True,
+    ...         "conformance_probability": 0.5, "false_accept_probability": 0.5}}}}
+    >>> r = conformity_of(doc)["rows"][0]
+    >>> r["limits"], r["acceptance"], r["guard_band"], r["outcome"], r["pc"]
+    ('[−1, 1] °/h', '[−1, 1] °/h', '0 °/h', 'pass', '50.0 %')
+    """
+    from gonio.report.i18n import labels, minus_sign
+    from gonio.report.stated import conformity_blocks
+    from gonio.result.statement import unit_text
+    from gonio.result.text import band_text
+
+    items = doc.get("items") if isinstance(doc, dict) else None
+    if not isinstance(items, dict):
+        return {"rules": [], "rows": [], "notes": []}
+    items = {k: it for k, it in items.items() if isinstance(it, dict)}
+    L = labels(lang)
+
+    def name_of(k):
+        return str(items[k].get("title") or k)
+
+    def unit_of(k):
+        return unit_text(items[k].get("unit")) or L["unit_one"]
+
+    blocks = conformity_blocks(items, L, name_of, unit_of,
+                               lambda kind, data, extra: (kind, data))
+    decided = [(k, it["conformity"]) for k, it in items.items() if it.get("conformity")]
+    at = next((i for i, (kind, _) in enumerate(blocks) if kind == "table"), None)
+    if at is None:
+        return {"rules": [], "rows": [], "notes": []}
+    _, (_, table) = blocks[at]
+    rules = [minus_sign(str(d[0])) for kind, d in blocks[:at] if kind == "p"]
+    notes = [minus_sign(str(d[0])) for kind, d in blocks[at + 1:] if kind == "p"]
+    rows = []
+    for (key, c), row in zip(decided, table):   # conformity_blocks: one row per decision
+        name, limits, acceptance, outcome, pc, pfa = (minus_sign(str(x)) for x in row)
+        u = unit_of(key)
+        w, w_lo = c.get("guard_band"), c.get("guard_band_lower")
+        if not c.get("outcome"):
+            band = "—"
+        elif w_lo is not None and w:
+            band = (f"{band_text(w_lo)} {u} at the lower limit, {band_text(w)} {u} "
+                    "at the upper")
+        else:
+            band = f"{band_text(w) if w else '0'} {u}"
+        rows.append({"key": key, "title": name, "limits": limits, "acceptance": acceptance,
+                     "guard_band": minus_sign(band), "outcome": outcome, "pc": pc, "pfa": pfa})
+    return {"rules": rules, "rows": rows, "notes": notes}

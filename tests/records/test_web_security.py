@@ -173,9 +173,24 @@ def _fields_posts(inst_id, cust_id, table_id, entry_id):
     ]
 
 
+def hostile_conformity(value: str):
+    """A stand-in for :func:`gonio.records.results.conformity_of` whose every text (rule,
+    row, note) is ``value``: what a calibration page prints of its stored decisions is
+    escaped like the rest, whatever the stored result says."""
+    fields = ("key", "title", "limits", "acceptance", "guard_band", "outcome", "pc", "pfa")
+
+    def conformity_of(doc, lang="en"):
+        return {"rules": [value], "rows": [dict.fromkeys(fields, value)], "notes": [value]}
+    return conformity_of
+
+
 @pytest.mark.parametrize("kind", sorted(HOSTILE))
-def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind):
+def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind,
+                                                         monkeypatch):
+    from gonio.records import queries
+
     admin = login(app, "admin")
+    monkeypatch.setattr(queries, "conformity_of", hostile_conformity(HOSTILE[kind]))
     actor = services.user(sqlite_store, "admin")
     cust = services.add_customer(sqlite_store, actor, "Base customer")
     inst = services.register_instrument(sqlite_store, actor, customer_id=cust.id,
@@ -214,6 +229,16 @@ def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind
         assert "<script>alert" not in r.text and "<img src=x" not in r.text, page
     if kind == "html":
         assert "&lt;script&gt;alert(" in admin.get("/customers").text
+        std = services.add_standard(sqlite_store, actor, name="reference", identifier="REF-1",
+                                    due_on="2099-01-01")
+        r = admin.post(f"/instruments/{inst.id}/calibrate", data={
+            "csrf": csrf_of(admin), "standards": [str(std.id)], "temperature_c": "20",
+            "humidity_pct": "40"}, files={"readings": ("r.csv", io.BytesIO(
+                b"# spec: ogam-draft\ntest,series,round,time_s,table_deg\n"))})
+        assert r.status_code == 303, r.text
+        page = admin.get(r.headers["location"]).text   # its statement of conformity escaped
+        conformity = re.search(r'<table id="conformity">(.*?)</table>', page, re.S).group(1)
+        assert "<script>alert" not in page and conformity.count("&lt;script&gt;alert(") >= 7
         register = admin.get("/table-calibrations").text      # the certificate and reason
         assert register.count("&lt;script&gt;alert(") >= 2, register
     exported = admin.get("/export/table_calibrations.csv")    # text, not a page
