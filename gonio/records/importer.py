@@ -295,11 +295,11 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
 def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
                             res_path: Path) -> None:
     """The table calibration ``sha`` an imported run used, kept as the calibration's
-    :data:`~gonio.records.services.TABLE_CALIBRATION` with its audit event; where the
-    laboratory's register holds that file for a table among the calibration's standards, that
-    entry is recorded as the one used, and must be in force on the calibration's date
-    (:func:`gonio.records.services.table_calibration_for`: else a one-line GonioError naming
-    results.json, and nothing is recorded)."""
+    :data:`~gonio.records.services.TABLE_CALIBRATION` with its audit event; the laboratory's
+    register must hold that file for a table among the calibration's standards, in force on
+    the calibration's date, and that entry is recorded as the one used
+    (:func:`gonio.records.services.table_calibration_for`: else — a file the register does not
+    hold included — a one-line GonioError naming results.json, and nothing is recorded)."""
     from gonio.specs import get
 
     tables = s.scalars(select(CalibrationStandard.standard_id).where(

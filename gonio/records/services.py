@@ -1173,10 +1173,10 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
       beside it must be its file.
     * an upload only: where the register holds that file (of any table) its entry, which
       must be of a table among the calibration's standards and in force on ``day`` (the
-      same checks: a registered file is never used as a bare upload), else, where the register holds no calibration of a ticked table,
-      the upload kept with this calibration only (``(sha256, None)``); an upload of another
-      file while the register holds one of a ticked table is refused (pick it, or register
-      the new file).
+      same checks: a registered file is never used as a bare upload); a file the register
+      does not hold is refused with one line naming the register command (a table
+      calibration that corrects a result is a registered entry in force: a one-byte edit of
+      a registered file is another file).
     * neither: the register's entry in force on ``day`` of the ticked table; several ticked
       tables each with one are refused (pick one); a ticked table whose register holds
       calibrations none of which is in force on ``day`` is refused (register its current
@@ -1248,7 +1248,11 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
                              f"{st.identifier}, and the file uploaded (SHA-256 "
                              f"{upload_sha256[:16]}…) is none of them: choose the register's "
                              "or register the new file first", key="table_calibration")
-        return upload_sha256, None
+        raise GonioError(f"the table calibration uploaded (SHA-256 {upload_sha256[:16]}…) is "
+                         "not in the register: a table calibration that corrects a result "
+                         "must be a registered entry in force (register it with `gonio db "
+                         "register-table-calibration FILE --table IDENT --valid-from D`, tick "
+                         "its table, and choose it)", key="table_calibration")
     in_force = []
     for sid, group in by_table.items():
         now = [e for e in group if not table_calibration_state(e, group, day, withdrawn)]

@@ -26,7 +26,8 @@ from gonio.errors import GonioError
 from gonio.records import blobs, services, worker
 from gonio.records.models import CalibrationFile
 
-from .test_web_lab_file import HEAD, alert, instrument, n_calibrations
+from .test_web_lab_file import HEAD, alert, n_calibrations
+from .test_web_lab_file import instrument as bare_instrument
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
 REPO = Path(__file__).resolve().parents[2]
@@ -42,6 +43,31 @@ def error_arcsec(a_deg):
 TABLE = ("# table certificate TC-9\ntable_deg,error_arcsec,u_arcsec\n" + "".join(
     f"{a:g},{error_arcsec(a):.6f},0.02\n" for a in POSITIONS)).encode()
 SHA = hashlib.sha256(TABLE).hexdigest()
+
+
+def register_table(store, content: bytes = TABLE, name: str = "RT-07 cal.csv"):
+    """``content`` registered as the calibration of the table RT-07 (the records' standard the
+    forms tick), in force from 30 days before today: a table calibration that corrects a
+    result must be a registered entry in force."""
+    from sqlalchemy import select
+
+    from gonio.records.models import Standard
+
+    with store.session() as s:
+        sid = s.scalar(select(Standard.id).where(Standard.identifier == "RT-07"))
+    sha, _ = services.store_file(store, io.BytesIO(content))
+    today = dt.date.today()
+    return services.register_table_calibration(
+        store, services.user(store, "tech"), standard_id=sid, sha256=sha, name=name,
+        valid_from=today - dt.timedelta(days=30), due_on=today + dt.timedelta(days=300),
+        certificate="TC-9")
+
+
+def instrument(store, spec_key="ogam-draft"):
+    """The forms' instrument and table RT-07, TABLE registered as the table's calibration."""
+    inst = bare_instrument(store, spec_key)
+    register_table(store)
+    return inst
 
 
 def post(client, inst, readings: bytes, table: bytes | None, lab: str | None = None,
@@ -180,28 +206,40 @@ def lab_with_table(sha: str, due: str = "2099-01-01") -> str:
             f'id = "TC-9"\ndue_on = "{due}"\n')
 
 
-@pytest.mark.parametrize("table, lab, spec_key, expect", [
-    (None, lab_with_table(SHA), "ogam-draft",
+OTHER_SHA = hashlib.sha256(TABLE + b"15,0.0,0.02\n").hexdigest()
+
+
+@pytest.mark.parametrize("table, lab, spec_key, registered, expect", [
+    (None, lab_with_table(SHA), "ogam-draft", False,
      "my-lab.toml: key table_calibration: the laboratory file names the table calibration"),
-    (TABLE + b"15,0.0,0.02\n", lab_with_table(SHA), "ogam-draft",
+    (TABLE, lab_with_table(OTHER_SHA), "ogam-draft", True,
      "my-lab.toml: key table_calibration.sha256: the table calibration uploaded has SHA-256"),
-    (TABLE, lab_with_table(SHA, "2020-01-01"), "ogam-draft",
+    (TABLE, lab_with_table(SHA, "2020-01-01"), "ogam-draft", True,
      "my-lab.toml: key table_calibration.due_on: the table calibration TC-9 was due on "
      "2020-01-01: expired"),
-    (TABLE, None, "jjf1535-2015", "key table_calibration: jjf1535-2015 takes no table "
-                                  "calibration"),
-], ids=["lab-names-one-none-uploaded", "another-content", "expired", "spec-takes-none"])
+    (TABLE, None, "jjf1535-2015", False, "key table_calibration: jjf1535-2015 takes no table "
+                                         "calibration"),
+    (TABLE + b"\n", None, "ogam-draft", False,
+     "key table_calibration: the table calibration uploaded (SHA-256"),
+    (TABLE + b"\n", None, "ogam-draft", True,
+     "key table_calibration: the register holds the calibrations of the table RT-07"),
+], ids=["lab-names-one-none-uploaded", "another-content", "expired", "spec-takes-none",
+        "unregistered-upload", "registered-plus-one-byte"])
 def test_refused_on_the_form(app, sqlite_store, bench_readings, table, lab,  # noqa: F811
-                             spec_key, expect):
-    """The form comes back (400) with one line; nothing is queued."""
+                             spec_key, registered, expect):
+    """The form comes back (400) with one line; nothing is queued. An upload the register
+    does not hold is refused, naming the register command (a table calibration that corrects
+    a result is a registered entry in force)."""
     tech = login(app, "tech")
-    inst = instrument(sqlite_store, spec_key)
+    inst = (instrument if registered else bare_instrument)(sqlite_store, spec_key)
     readings = (Path(bench_readings[0]).read_bytes() if spec_key == "ogam-draft"
                 else f"# spec: {spec_key}\n".encode())
     r = post(tech, inst, readings, table, lab)
     assert r.status_code == 400
     msg = alert(r.text)
     assert msg.startswith(expect) and "\n" not in msg, msg
+    if "(SHA-256" in expect:
+        assert "gonio db register-table-calibration" in msg, msg
     assert n_calibrations(sqlite_store) == 0
 
 
@@ -232,6 +270,10 @@ name = "K"
 [signatory]
 approved_by = "P"
 
+[[standards]]
+name = "rotary table"
+identifier = "RT-07"
+
 [table_calibration]
 file = "tc.csv"
 sha256 = "{sha}"
@@ -247,6 +289,7 @@ def test_import_keeps_the_laboratory_table_calibration(sqlite_store, bench_readi
     from gonio.cli import main
     from gonio.records.importer import import_output_folder
 
+    bare_instrument(sqlite_store)
     (tmp_path / "tc.csv").write_bytes(TABLE)
     lab = tmp_path / "lab.toml"
     lab.write_text(IMPORT_LAB.format(sha=SHA), encoding="utf-8")
@@ -264,6 +307,13 @@ def test_import_keeps_the_laboratory_table_calibration(sqlite_store, bench_readi
         import_output_folder(sqlite_store, out, lab=lab2, readings=bench_readings[0],
                              protocol=SMALL_PROTOCOL)
     assert n_calibrations(sqlite_store) == 0
+    # the run's table calibration not in the register: refused, naming the register command
+    with pytest.raises(GonioError, match="not in the register.*gonio db "
+                                         "register-table-calibration"):
+        import_output_folder(sqlite_store, out, lab=lab, readings=bench_readings[0],
+                             protocol=SMALL_PROTOCOL)
+    assert n_calibrations(sqlite_store) == 0
+    register_table(sqlite_store, TABLE, "tc.csv")
     cal_id = import_output_folder(sqlite_store, out, lab=lab, readings=bench_readings[0],
                                   protocol=SMALL_PROTOCOL)
     with sqlite_store.session() as s:
@@ -316,7 +366,8 @@ def test_page_shows_the_uploaded_name_escaped(app, sqlite_store, bench_readings)
     from urllib.parse import quote
 
     tech = login(app, "tech")
-    inst = instrument(sqlite_store)
+    inst = bare_instrument(sqlite_store)
+    register_table(sqlite_store, TABLE, HOSTILE)
     r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=HOSTILE)
     assert r.status_code == 303, alert(r.text)
     cal_id = int(r.headers["location"].rsplit("/", 1)[1])
@@ -348,15 +399,19 @@ LOOKALIKE = ["calib\u202evsc.exe", "RT\u206607.csv", "RT-07\u200f.csv", "RT\u200
 
 @pytest.mark.parametrize("name", LOOKALIKE, ids=["rlo", "isolate", "rlm", "zwsp", "c1"])
 def test_lookalike_upload_name_refused(app, sqlite_store, bench_readings, name):  # noqa: F811
-    """An uploaded table calibration named with an invisible or direction-changing character
-    comes back (400) with one line naming the code point; nothing is queued."""
+    """A table calibration named with an invisible or direction-changing character: its
+    registration is refused with one line naming the code point, and its upload (so not in
+    the register) comes back (400); nothing is queued."""
     tech = login(app, "tech")
-    inst = instrument(sqlite_store)
+    inst = bare_instrument(sqlite_store)
+    bad = next(c for c in name if not (c.isascii() and c.isprintable()))
+    with pytest.raises(GonioError) as e:
+        register_table(sqlite_store, TABLE, name)
+    assert f"U+{ord(bad):04X}" in str(e.value) and "\n" not in str(e.value), str(e.value)
     r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=name)
     assert r.status_code == 400
     msg = alert(r.text)
-    bad = next(c for c in name if not (c.isascii() and c.isprintable()))
-    assert f"U+{ord(bad):04X}" in msg and "\n" not in msg, msg
+    assert ("U+" in msg or "not in the register" in msg) and "\n" not in msg, msg
     assert n_calibrations(sqlite_store) == 0
 
 
@@ -368,7 +423,8 @@ def test_download_names_agree(app, sqlite_store, bench_readings, name):  # noqa:
     from urllib.parse import quote, unquote
 
     tech = login(app, "tech")
-    inst = instrument(sqlite_store)
+    inst = bare_instrument(sqlite_store)
+    register_table(sqlite_store, TABLE, name)
     r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=name)
     assert r.status_code == 303, alert(r.text)
     cal_id = int(r.headers["location"].rsplit("/", 1)[1])

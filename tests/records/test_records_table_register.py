@@ -617,3 +617,30 @@ def test_register_today_is_the_utc_date(store, monkeypatch):
                      (dt.datetime(2026, 1, 2, 0, 30), "expired: it was due on 2026-01-01")):
         monkeypatch.setattr(services, "utcnow", lambda at=at: at)
         assert [r["state"] for r in services.table_calibrations(store)] == [want], at
+
+
+@pytest.mark.parametrize("content, standards", [
+    (lambda b: b + b"\n", "other"),                              # one byte more, table not ticked
+    (lambda b: b + b"\n", "none"),                               # no standards at all
+    (lambda b: b.replace(b"0.010", b"0.500"), "other"),          # its 120 deg error edited
+    (lambda b: b.replace(b"0.010", b"0.500"), "table"),          # edited, the table ticked
+], ids=["newline-table-not-ticked", "newline-no-standards", "edited-table-not-ticked",
+        "edited-table-ticked"])
+def test_unregistered_upload_refused(store, content, standards):
+    """A table calibration that corrects a result is a registered entry: an upload the register
+    does not hold (a registered file plus one byte, or with an error edited) is refused in one
+    line naming the register command, whatever is ticked (was: accepted as a bare upload,
+    table_calibration_id None, when no rotary table was ticked); nothing created."""
+    people, inst_id, table_id, other_id = setup_lab(store)
+    register(store, people["tech"], table_id, "TC-1")
+    sha = services.store_file(store, io.BytesIO(content(FILES["TC-1"])))[0]
+    assert sha != hashlib.sha256(FILES["TC-1"]).hexdigest()
+    ids = {"other": [other_id], "none": [], "table": [table_id, other_id]}[standards]
+    with pytest.raises(GonioError) as e:
+        create(store, people["tech"], inst_id, "2025-03-01", ids, table_calibration_sha256=sha,
+               table_calibration_name="TC-1.csv")
+    msg = str(e.value)
+    assert "\n" not in msg and ("gonio db register-table-calibration" in msg
+                                or "register the new file" in msg), msg
+    with store.session() as s:
+        assert s.scalar(select(Calibration.id)) is None

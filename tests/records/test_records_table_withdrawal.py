@@ -129,9 +129,9 @@ def test_late_registration_refused_and_never_changes_a_sealed_entry(store, compu
     # only calibrations made otherwise block: void ones and the same bytes do not
     people2, inst2, table2, _ = setup_lab_more(store)
     up = services.store_file(store, io.BytesIO(FILES["TC-3"]))[0]
-    same = create(store, tech, inst2, "2025-08-01", [table2], table_calibration_sha256=up,
-                  table_calibration_name="TC-3.csv")
-    assert same.table_calibration_id is None
+    with pytest.raises(GonioError, match="not in the register"):   # no bare upload
+        create(store, tech, inst2, "2025-08-01", [table2], table_calibration_sha256=up,
+               table_calibration_name="TC-3.csv")
     other = create(store, tech, inst2, "2025-09-01", [table2])
     with store.writing() as s:
         s.get(Calibration, other.id).status = "void"
