@@ -281,8 +281,8 @@ due_on = "2099-01-01"
 """
 
 
-def test_import_keeps_the_laboratory_table_calibration(sqlite_store, bench_readings, tmp_path,
-                                                        capsys):
+def test_import_keeps_the_laboratory_table_calibration(app, sqlite_store,  # noqa: F811
+                                                        bench_readings, tmp_path, capsys):
     """``gonio db import FOLDER --lab FILE`` of a command-line run made with the laboratory
     file's [table_calibration]: the calibration keeps that file (hashlib digest) and its seal
     holds; a laboratory file naming another calibration than the run used is refused."""

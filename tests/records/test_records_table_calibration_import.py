@@ -1,7 +1,10 @@
 """A command-line run made with ``gonio calibrate --table-calibration FILE`` (no laboratory
 file) put into the records (docs/records.md#table-calibration): ``gonio db import`` keeps the
 table calibration the run used or records nothing, and the seal refuses a result whose table
-calibration the records do not keep.
+calibration the records do not keep. A table calibration that corrects a result is a
+registered entry in force of a table among the calibration's standards: the imports that keep
+the file tick the table RT-07 (a laboratory file's ``[[standards]]``) and are refused, nothing
+recorded, until the file is registered.
 
 Truths from outside the records: the file's SHA-256 by hashlib, the bytes written here, the
 file name given to ``gonio calibrate``."""
@@ -21,11 +24,18 @@ from gonio.records import services
 from gonio.records.db import open_store
 from gonio.records.models import CalibrationFile
 
-from .test_records_table_calibration import SMALL_PROTOCOL, TABLE
+from .conftest import make_people
+from .test_records_table_calibration import IMPORT_LAB, SMALL_PROTOCOL, TABLE, register_table
+from .test_web_lab_file import instrument as bare_instrument
 from .test_web_lab_file import n_calibrations
 
 SHA = hashlib.sha256(TABLE).hexdigest()
 NAME = "RT-07 table cal.csv"          # the user's own file name, with a space
+#: the laboratory file ticking the table RT-07 (its ``[[standards]]``) and naming no table
+#: calibration: the run's file is the one given with --table-calibration or found in the folder
+LAB_TICKS_TABLE = IMPORT_LAB.split("[table_calibration]")[0]
+assert 'identifier = "RT-07"' in LAB_TICKS_TABLE and "sha256" not in LAB_TICKS_TABLE
+REGISTER = "gonio db register-table-calibration"
 
 
 @pytest.fixture(scope="module")
@@ -48,6 +58,39 @@ def _import(data: Path, folder: Path, readings: Path, *extra: str) -> int:
 
     return main(["db", "import", str(folder), "--data", str(data), "--readings", str(readings),
                  "--protocol", str(SMALL_PROTOCOL), *extra])
+
+
+def _with_table(st) -> None:
+    """The records' people, the bench's instrument and the table RT-07 (a registered
+    standard), whose register holds no calibration yet."""
+    make_people(st)
+    bare_instrument(st)
+
+
+def _store_with_table(data: Path) -> None:
+    """:func:`_with_table` in the records at ``data``."""
+    st = open_store(None, data)
+    try:
+        _with_table(st)
+    finally:
+        st.close()
+
+
+def _register(data: Path) -> int:
+    """TABLE registered as RT-07's calibration in force (under another name than the user's
+    file: the name kept is the one the run read it under); the entry's id."""
+    st = open_store(None, data)
+    try:
+        return register_table(st, TABLE, "RT-07 cal.csv").id
+    finally:
+        st.close()
+
+
+def _lab(where: Path) -> Path:
+    """:data:`LAB_TICKS_TABLE` written into ``where``."""
+    lab = where / "ticks-table.toml"
+    lab.write_text(LAB_TICKS_TABLE, encoding="utf-8")
+    return lab
 
 
 def _one_line(capsys) -> str:
@@ -104,20 +147,35 @@ def test_import_with_another_file_refused(cli_run, tmp_path, capsys):
 
 
 def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
-    """--table-calibration FILE (the run's bytes): exit 0, the calibration keeps the file
-    (hashlib digest, the same bytes) under the user's file name, which the certificate
-    rendered from the record names as the run's did; the seal holds;
-    the seal then refuses once the kept file is taken away, one line naming the calibration
-    and the missing file."""
+    """--table-calibration FILE (the run's bytes), the table ticked (--lab's [[standards]]):
+    while the register does not hold the file, exit 2, one line naming the register command,
+    nothing recorded; once it is registered, exit 0, the calibration keeps the file (hashlib
+    digest, the same bytes) under the user's file name, which the certificate rendered from
+    the record names as the run's did; the seal holds; the seal then refuses once the kept
+    file is taken away, one line naming the calibration and the missing file."""
     from gonio.records.compute import render_folder, write_lab_toml
 
     out, readings, tc = cli_run
     data = tmp_path / "data"
-    assert _import(data, out, readings, "--table-calibration", str(tc)) == 0
+    _store_with_table(data)
+    lab = _lab(tmp_path)
+    capsys.readouterr()
+    assert _import(data, out, readings, "--table-calibration", str(tc), "--lab", str(lab)) == 2
+    err = _one_line(capsys)
+    assert "not in the register" in err and REGISTER in err and SHA[:16] in err, err
+    st = open_store(None, data)
+    try:
+        assert n_calibrations(st) == 0
+    finally:
+        st.close()
+    entry = _register(data)
+    assert _import(data, out, readings, "--table-calibration", str(tc), "--lab", str(lab)) == 0
     capsys.readouterr()
     st = open_store(None, data)
     try:
+        assert n_calibrations(st) == 1
         (cal,) = [services.calibration(st, 1)]
+        assert cal.table_calibration_id == entry     # the registered entry in force is used
         with st.session() as s:
             assert s.get(CalibrationFile, (cal.id, "table_calibration.csv")).sha256 == SHA
         assert services.file_bytes(st, SHA) == TABLE
@@ -154,25 +212,43 @@ def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
 
 
 def test_import_takes_a_copy_in_the_folder(cli_run, tmp_path):
-    """A copy of the file under the name the run used, put in the output folder, is taken
-    (its digest checked); a copy with other bytes under that name is not, and the import is
+    """A copy of the file under the name the run used, put in the output folder, the table
+    ticked (the laboratory file's [[standards]]): while the register does not hold the file
+    the import is refused, one line naming the register command, nothing recorded; once it
+    is registered, the copy is taken (its digest checked) under the user's name, with the
+    registered entry; a copy with other bytes under that name is not, and the import is
     refused."""
     from gonio.records.importer import import_output_folder
 
     out, readings, _ = cli_run
     folder = tmp_path / "run"
     shutil.copytree(out, folder)
-    (folder / NAME).write_bytes(TABLE + b"\n")
+    (folder / NAME).write_bytes(TABLE)
+    lab = _lab(tmp_path)
     st = open_store(None, tmp_path / "data")
     try:
+        _with_table(st)                                     # the table RT-07, nothing registered
+        with pytest.raises(GonioError) as exc:
+            import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL,
+                                 lab=lab)
+        msg = str(exc.value)
+        assert "\n" not in msg and "not in the register" in msg and REGISTER in msg, msg
+        assert SHA[:16] in msg, msg
+        assert n_calibrations(st) == 0
+        entry = register_table(st, TABLE, "RT-07 cal.csv").id
+        (folder / NAME).write_bytes(TABLE + b"\n")
         with pytest.raises(GonioError, match="not in the folder: give it with "
                                              "--table-calibration"):
-            import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL)
+            import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL,
+                                 lab=lab)
         assert n_calibrations(st) == 0
         (folder / NAME).write_bytes(TABLE)
-        cid = import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL)
+        cid = import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL,
+                                   lab=lab)
         with st.session() as s:
             assert s.get(CalibrationFile, (cid, "table_calibration.csv")).sha256 == SHA
+            assert services.table_calibration_name(s, cid) == NAME
+        assert services.calibration(st, cid).table_calibration_id == entry
         assert services.seal(st, cid)
     finally:
         st.close()
@@ -197,23 +273,44 @@ def test_table_calibration_for_a_run_that_used_none_refused(cli_run, bench_readi
         st.close()
 
 
-def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch):
-    """``gonio calibrate --table-calibration FILE --record``: the calibration recorded keeps
-    the file the run used (hashlib digest) and seals."""
+def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, capsys):
+    """``gonio calibrate --table-calibration FILE --lab LAB --record``, the table ticked (the
+    laboratory file's [[standards]]): while the register does not hold the file, exit 2, one
+    line naming the register command, nothing recorded; once registered, the calibration
+    recorded keeps the file the run used (hashlib digest) under the user's name, the
+    registered entry, and seals."""
     from gonio.cli import main
 
     monkeypatch.delenv("GONIO_USER", raising=False)
     tc = tmp_path / NAME
     tc.write_bytes(TABLE)
     data = tmp_path / "data"
-    assert main(["calibrate", str(bench_readings[1]), "--protocol", str(SMALL_PROTOCOL),
-                 "--table-calibration", str(tc), "--out", str(tmp_path / "run"), "--record",
-                 "--data", str(data)]) == 0
+    _store_with_table(data)
+    lab = _lab(tmp_path)
+
+    def record(out: str) -> int:
+        return main(["calibrate", str(bench_readings[1]), "--protocol", str(SMALL_PROTOCOL),
+                     "--table-calibration", str(tc), "--lab", str(lab),
+                     "--out", str(tmp_path / out), "--record", "--data", str(data)])
+
+    capsys.readouterr()
+    assert record("run0") == 2
+    err = _one_line(capsys)
+    assert "not in the register" in err and REGISTER in err and SHA[:16] in err, err
     st = open_store(None, data)
     try:
+        assert n_calibrations(st) == 0
+    finally:
+        st.close()
+    entry = _register(data)
+    assert record("run") == 0
+    st = open_store(None, data)
+    try:
+        assert n_calibrations(st) == 1
         with st.session() as s:
             assert s.get(CalibrationFile, (1, "table_calibration.csv")).sha256 == SHA
             assert services.table_calibration_name(s, 1) == NAME
+        assert services.calibration(st, 1).table_calibration_id == entry
         assert services.seal(st, 1)
     finally:
         st.close()

