@@ -87,7 +87,8 @@ def write_lab_toml(lab: dict, path: str | Path) -> Path:
 def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
                      protocol: str | None = None, lab: str | Path | None = None,
                      table_calibration: str | Path | None = None,
-                     gyro_type: str | None = None, options: dict | None = None) -> list[str]:
+                     gyro_type: str | None = None, options: dict | None = None,
+                     record: dict | None = None) -> list[str]:
     """Calibrate ``readings`` per ``spec_key`` into ``out`` with the certificate (and the DCC
     where the specification writes one), through the one dispatch
     (:func:`gonio.pipeline.dispatch.calibrate`); ``table_calibration``: the calibration's
@@ -95,8 +96,9 @@ def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
     optical-gyro type its ``gyro_type`` option is given (``calibrate --record``'s registered
     instrument's, where the specification takes one); ``options``: the other options it is
     computed with (an imported folder's, as its manifest records them:
-    :func:`gonio.records.importer.recorded_options`; None: the defaults); returns the file
-    names written."""
+    :func:`gonio.records.importer.recorded_options`; None: the defaults); ``record``: the
+    registered instrument's identity the readings are checked against, as ``gonio calibrate
+    --record`` gives it (its findings the same); returns the file names written."""
     from gonio.pipeline.dispatch import calibrate
     from gonio.specs import get
 
@@ -109,7 +111,7 @@ def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
     extra.update(options or {})
     calibrate(readings, out, spec_key=spec.key, lab=lab, dcc="dcc" in takes,
               protocol=protocol if "protocol" in takes else None,
-              inputs=[readings, protocol, lab, table_calibration], **extra)
+              inputs=[readings, protocol, lab, table_calibration], record=record, **extra)
     return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
 
 

@@ -510,7 +510,8 @@ def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str |
         calibrate_folder(readings, work / "out", spec_key=spec_key, protocol=protocol,
                          lab=lab, table_calibration=table if not (
                              lab_d or {}).get("table_calibration") else None,
-                         options=options)
+                         options=options,
+                         record={"gyro_type": gyro_type} if gyro_type else None)
     return work / "out"
 
 
@@ -600,6 +601,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         except ValueError:
             raise GonioError(f"not a date (YYYY-MM-DD): {str(meta['date'])[:40]!r}",
                              file=res_path, key="metadata.date") from None
+        try:                         # named before the (costly) recomputation
+            services.plausible_dates(day, None)
+        except GonioError as exc:
+            raise GonioError(exc.message, file=res_path, key="metadata.date") from None
     key = spec_key or results.get("spec") or meta.get("spec")
     if not key:      # every results.json gonio writes names its specification: no guessing
         raise GonioError("results.json names no specification (no 'spec'); give the "
