@@ -117,7 +117,7 @@ def combined_k_of_components(components, u_c: float, p: float, m: int = 400_000,
 
 
 _CELL_FIELDS = {"U": r" ± (\S+)", "k": r"\bk = ([^,)\s]+)", "nu_eff": r"ν_eff = ([^,)\s]+)",
-                "p": r"p ≈ (\S+) %", "interval": r"\[(\S+), (\S+)\]", "upper": r"≤ (\S+)"}
+                "p": r"p [≈=] (\S+) %", "interval": r"\[(\S+), (\S+)\]", "upper": r"≤ (\S+)"}
 
 
 def cell_numbers(text: str) -> dict:
