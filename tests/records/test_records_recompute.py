@@ -222,7 +222,7 @@ def test_an_optical_run_with_a_lab_file_and_a_table_calibration(bench_readings, 
     from gonio.cli import main
     from gonio.records.importer import import_output_folder
 
-    from .test_records_table_calibration import TABLE
+    from .test_records_table_calibration import TABLE, register_table
     from .test_web_lab_file import limits_toml
 
     tc = tmp_path / "tc.csv"
@@ -241,6 +241,7 @@ def test_an_optical_run_with_a_lab_file_and_a_table_calibration(bench_readings, 
         tech = make_people(store)["tech"]
         services.add_standard(store, tech, name="rotary table", identifier="RT-07",
                               due_on="2099-01-01")          # the laboratory file's standard
+        register_table(store, TABLE, "tc.csv")    # a correcting table calibration is registered
         kw = dict(readings=bench_readings[0], protocol=SMALL_PROTOCOL, lab=lab,
                   table_calibration=tc, actor=tech)
         with pytest.raises(GonioError, match=r"items\.scale_factor\.value: "):
