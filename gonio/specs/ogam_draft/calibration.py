@@ -2338,6 +2338,26 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
                    gyro_type=gyro_type, table_calibration=table_calibration).result()
 
 
+def programme_conditions(proto: Protocol) -> dict:
+    """The programme's 7.6 rates and 7.7 orientations, each with its reference (7.4's run
+    when the protocol reuses it), as :func:`~gonio.specs.ogam_draft.items.compute_characteristics`
+    takes them; an item the protocol does not plan: None (the conditions read).
+
+    >>> p = load_protocol("ogam-draft")
+    >>> c = programme_conditions(p)
+    >>> c["rates_dps"], c["orientations"]
+    ((1.0, 10.0, 60.0, 100.0, 150.0, 200.0, 250.0, 300.0), ('up', 'north', 'east'))
+    """
+    rates = orients = None
+    if proto.rate_consistency:
+        rates = tuple(sorted({float(it.rate_dps) for it in proto.rate_consistency}
+                             | {float(proto.rate_reference_dps)}))
+    if proto.pointing_consistency:
+        have = [it.orientation for it in proto.pointing_consistency]
+        orients = tuple(dict.fromkeys([proto.pointing_reference] + have))
+    return {"rates_dps": rates, "orientations": orients}
+
+
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
             *, monte_carlo_trials: int = 0, seed: int = 0,
             static_record: StaticRecord | None = None, budget: str = "physical",
@@ -2394,7 +2414,8 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
         screen_against_mpe(table_calibration, settings["table_mpe_arcsec"])
     kept, excluded, findings = screen_readings(rd, proto, findings)
     res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
-                                  reference_orientation=proto.pointing_reference)
+                                  reference_orientation=proto.pointing_reference,
+                                  **programme_conditions(proto))
     _note_exclusions(res, excluded)
     check_counts_agree(kept, res)
     e_tilt = None       # E corrected at the measured tilt: the physical reading only

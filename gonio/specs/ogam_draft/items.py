@@ -692,8 +692,48 @@ def consistency_incomplete(per_cond: list, fmt, clause: str) -> str | None:
             "position again)")
 
 
+def consistency_missing_conditions(values, conditions, fmt, clause: str) -> str | None:
+    """*Ambiguity* (7.6, 7.7): a condition of the programme with no reading at all.
+
+    7.6 "calibrate E at each rate", 7.7 "in each [direction]": C is the range of E over
+    the programme's conditions. A condition with no reading leaves that range unknown (the
+    range over fewer conditions is at most as large: every 1 °/s reading deleted gave C_v
+    0.50 ppm over 6 of 7 rates, 1.21 ppm over the seven). **Reading taken**: the
+    programme's conditions (the protocol's rates or orientations with the reference; the
+    draft's default programme when no protocol is named, ``ogam-draft``) define the item;
+    a condition of them read in no row (its own test's rows, or 7.4's rows for the
+    reference) makes the item not measured, the reason naming each missing condition, as
+    a missing position does (:func:`consistency_incomplete`). ``conditions`` None (the
+    items called without a programme): the conditions read are the programme.
+
+    Returns the reason, or None when every condition of the programme was read.
+
+    >>> fmt = lambda v: f"{v:g} deg/s"
+    >>> consistency_missing_conditions([60.0, 10.0], (1.0, 10.0, 60.0), fmt, "7.6")[:60]
+    '7.6 compares E at every condition of the programme: 1 deg/s '
+    >>> consistency_missing_conditions([60.0, 10.0], (10.0, 60.0), fmt, "7.6") is None
+    True
+    """
+    if conditions is None:
+        return None
+
+    def same(a, b):
+        if isinstance(a, str) or isinstance(b, str):
+            return a == b
+        return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=0.0)
+
+    missing = [c for c in conditions if not any(same(c, v) for v in values)]
+    if not missing:
+        return None
+    n = len(conditions)
+    return (f"{clause} compares E at every condition of the programme: "
+            f"{', '.join(fmt(c) for c in missing)} has no reading ({n - len(missing)} of "
+            f"{n} conditions read); not stated from fewer conditions (read the missing "
+            "condition)")
+
+
 def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_value,
-                 fmt, scale):
+                 fmt, scale, conditions=None):
     """E per condition (7.6 rates, 7.7 orientations), spread and ratio."""
     rows = _rows(df, test)
     if rows.empty:
@@ -727,6 +767,13 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
             return Characteristic(name=name, reason=reason, unused=unused)
         groups.append((ref_value, "angle_deviation", ref_rows))
         is_ref.append(True)
+    reason = consistency_missing_conditions([v for v, _, _ in groups], conditions, fmt,
+                                            _CLAUSES[name])
+    if reason is not None:
+        for _, _, g in groups:
+            for l in g["line"]:
+                unused.setdefault(int(l), reason)
+        return Characteristic(name=name, reason=reason, unused=unused)
     if len(groups) < 2:
         reason = f"{_CLAUSES[name]} needs at least 2 conditions, file has only {ref_txt}"
         for l in rows["line"]:
@@ -790,7 +837,8 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
 
 def rate_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = None, *,
                      reference_rate_dps: float = 60.0,
-                     reference_orientation: str = "up") -> Characteristic:
+                     reference_orientation: str = "up",
+                     conditions=None) -> Characteristic:
     """Rate consistency C_v, draft 7.6 (and 3.4), in ppm; spread in ″.
 
     For each table rate v of the ``rate_consistency`` rows (axis at
@@ -799,7 +847,9 @@ def rate_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | None
     ``rate_consistency`` row is at the reference rate, the ``angle_deviation``
     rows at that rate serve ("if 7.4 is done, 60 °/s need not be repeated").
     A condition missing a position the reference or two conditions have
-    leaves C_v not measured (:func:`consistency_incomplete`); a position read
+    leaves C_v not measured (:func:`consistency_incomplete`), and so does a rate of
+    ``conditions`` (the programme's rates, reference included; None: the rates read)
+    with no reading (:func:`consistency_missing_conditions`); a position read
     at one condition only is not compared (reported unused). C_v = (max E_v − min E_v) / reference angle · 10⁶, the
     reference angle from :func:`consistency_reference_angle`;
     ``spread_arcsec`` = max E_v − min E_v.
@@ -821,19 +871,21 @@ def rate_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | None
                         test="rate_consistency", cond_col="rate_dps",
                         ref_value=float(reference_rate_dps), fixed_col="orientation",
                         fixed_value=reference_orientation, fmt=lambda v: f"{v:g} deg/s",
-                        scale=1e6)
+                        scale=1e6, conditions=conditions)
 
 
 def pointing_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = None, *,
                          reference_rate_dps: float = 60.0,
-                         reference_orientation: str = "up") -> Characteristic:
+                         reference_orientation: str = "up",
+                         conditions=None) -> Characteristic:
     """Pointing consistency C_g, draft 7.7 (and 3.5), in %; spread in ″.
 
     As :func:`rate_consistency`, over the table-axis directions of the
     ``pointing_consistency`` rows at ``reference_rate_dps`` (up, north/south,
     east/west); reference = axis up, from ``angle_deviation`` rows when there
     is no ``pointing_consistency`` row with the axis up. C_g = (max E_g −
-    min E_g) / reference angle · 100.
+    min E_g) / reference angle · 100. ``conditions``: the programme's orientations
+    (reference included), each of which must be read (None: those read).
 
     Examples
     --------
@@ -849,7 +901,7 @@ def pointing_consistency(df: pd.DataFrame, scale_factor_counts_per_deg: float | 
                         test="pointing_consistency", cond_col="orientation",
                         ref_value=reference_orientation, fixed_col="rate_dps",
                         fixed_value=float(reference_rate_dps), fmt=lambda v: f"axis {v}",
-                        scale=100.0)
+                        scale=100.0, conditions=conditions)
 
 
 # --------------------------------------------------------------------------- all seven
@@ -905,15 +957,19 @@ def _unused_reason_default(test: str) -> str:
 def compute_characteristics(readings: Readings | pd.DataFrame, *,
                             reference_rate_dps: float = 60.0,
                             reference_orientation: str = "up",
-                            nominal_scale_factor_counts_per_deg: float | None = None
-                            ) -> CalibrationResults:
+                            nominal_scale_factor_counts_per_deg: float | None = None,
+                            rates_dps=None, orientations=None) -> CalibrationResults:
     """All seven characteristics of draft clause 7 from one readings file.
 
     Counts are turned into angles with K from 7.1 when the file has
     ``scale_factor`` rows, else ``nominal_scale_factor_counts_per_deg`` (the
     argument, then the metadata key of that name). An item whose readings
     are absent, or whose counts cannot be converted, is not measured, with
-    the reason; the others are still computed.
+    the reason; the others are still computed. ``rates_dps``, ``orientations``: the
+    programme's 7.6 rates and 7.7 orientations, reference included (the calibration passes
+    the protocol's, the draft's default programme when none is named); a condition of them
+    without a reading makes the item not measured (:func:`consistency_missing_conditions`).
+    None: the conditions read are the programme (the items without a protocol).
 
     Examples
     --------
@@ -972,8 +1028,10 @@ def compute_characteristics(readings: Readings | pd.DataFrame, *,
     zs = run(zero_stability, ["zero_stability"], df, k)
     ad = run(angle_deviation, ["angle_deviation"], df, k, **kw)
     rp = run(repeatability, ["angle_deviation"], df, k, **kw)
-    rc = run(rate_consistency, ["rate_consistency", "angle_deviation"], df, k, **kw)
-    pc = run(pointing_consistency, ["pointing_consistency", "angle_deviation"], df, k, **kw)
+    rc = run(rate_consistency, ["rate_consistency", "angle_deviation"], df, k,
+             conditions=rates_dps, **kw)
+    pc = run(pointing_consistency, ["pointing_consistency", "angle_deviation"], df, k,
+             conditions=orientations, **kw)
     results = [sf, nl, zs, ad, rp, rc, pc]
     used = frozenset().union(*(r.used_lines for r in results))
     reasons: dict[int, str] = {}

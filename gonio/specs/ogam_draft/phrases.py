@@ -169,6 +169,10 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "{5} s，间隔 {6} s）；按实际读数时刻使用，T = {7} s（首末读数之间）"),
     (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
     (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
+    (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading; the "
+     r"item is not stated \((\S+) compares E at every condition of the programme\)",
+     "{1}（{2}）：校准方案的测量条件 {3} °/s、{4}轴没有读数；该项目不予给出（{5} "
+     "要求在校准方案的每个测量条件下比较 E）"),
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading",
      "{1}（{2}）：校准方案的测量条件 {3} °/s、{4}轴没有读数"),
     (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
@@ -203,6 +207,11 @@ REASONS_ZH: tuple[tuple[str, str], ...] = (
      r"stated from fewer conditions or positions \(read the missing position again\)",
      "{1} 要求各测量条件在相同的校准位置上比较 E：{2}；不以较少的测量条件或位置给出结果"
      "（请补测缺失的位置）"),
+    (r"(\S+) compares E at every condition of the programme: (.+) has no reading \((\d+) "
+     r"of (\d+) conditions read\); not stated from fewer conditions \(read the missing "
+     r"condition\)",
+     "{1} 要求在校准方案的每个测量条件下比较 E：{2} 没有读数（校准方案 {4} 个测量条件中仅读得 "
+     "{3} 个）；不以较少的测量条件给出结果（请补测缺失的测量条件）"),
     (r"(.+) lacks (.+) deg \((\d+) of (\d+) positions\)", "{1} 缺少 {2}°（{4} 个位置中仅有 {3} 个）"),
     (r"(\S+) deg/s, axis (\w+)", "{1} °/s，{2}轴"),
     (r"(\S+) deg/s", "{1} °/s"),

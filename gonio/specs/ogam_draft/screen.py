@@ -533,9 +533,11 @@ def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
                      & (rows["orientation"] == it.orientation)]
             cond = f"{it.rate_dps:g} °/s, axis {it.orientation}"
             if not len(g):
+                gone = (f"; the item is not stated ({CLAUSES[test]} compares E at every "
+                        "condition of the programme)" if test in COMPARED else "")
                 out.append(Finding("incomplete-programme",
                                    f"{test} ({CLAUSES[test]}): the programme's condition {cond} "
-                                   "has no reading", "flagged", file=file, test=test,
+                                   f"has no reading{gone}", "flagged", file=file, test=test,
                                    clause=CLAUSES[test], rule="every programme condition read"))
                 continue
             have = set(g["round"].to_numpy().astype(np.int64).tolist())
