@@ -213,6 +213,8 @@ def set_settings(store, actor: User | None, **values) -> dict:
     if actor is not None:
         require(actor, "admin")
     values = {k: check_setting(k, v) for k, v in values.items()}
+    if "decision_rule" in values or "guard_band_factor" in values:
+        check_guard_setting(settings(store) | values, values)
     with store.writing() as s:
         for k, v in values.items():
             row = s.get(Setting, k)
@@ -224,6 +226,22 @@ def set_settings(store, actor: User | None, **values) -> dict:
             audit(s, actor, "setting", "settings", k, before, {"key": k, "value": v})
         s.commit()
     return settings(store)
+
+
+def check_guard_setting(merged: dict, changed: dict) -> None:
+    """The laboratory's decision rule and guard-band factor together (``merged``: the
+    settings as they would be stored) by the rule a laboratory file's ``[decision_rule]`` is
+    checked with (:func:`gonio.formats.lab.check_guard_factor`: a rule with a guard band,
+    guarded or non-binary, needs r ≥ 1): refused in one line naming the field changed
+    (``guard_band_factor`` where ``changed`` sets it, else ``decision_rule``), before
+    anything is stored — not when a calibration is decided with it."""
+    from gonio.formats.lab import check_guard_factor
+
+    try:
+        check_guard_factor(merged["decision_rule"], float(merged["guard_band_factor"]))
+    except GonioError as exc:
+        raise GonioError(exc.message, key="guard_band_factor" if "guard_band_factor" in changed
+                         else "decision_rule") from None
 
 
 def check_setting(key: str, value) -> str:
@@ -1013,6 +1031,18 @@ def _entry_for_withdrawal(s: Session, tc_id) -> TableCalibration:
     return tc
 
 
+def _pending_withdrawal_or_refused(s: Session, tc_id) -> tuple[TableCalibration, dict]:
+    """The register's entry ``tc_id`` (locked, not withdrawn: :func:`_entry_for_withdrawal`)
+    and the withdrawal asked for of it (:func:`pending_withdrawal`), which approving or
+    declining needs: none asked for is refused in one line."""
+    tc = _entry_for_withdrawal(s, tc_id)
+    asked = pending_withdrawal(s, tc.id)
+    if asked is None:
+        raise GonioError(f"no withdrawal of table calibration {tc.id} is asked for",
+                         key="table_calibration")
+    return tc, asked
+
+
 def ask_withdrawal(store, actor: User, tc_id: int, reason: str) -> None:
     """Ask for the register's entry ``tc_id`` to be withdrawn (technician or reviewer), with
     the reason; it takes effect when another person approves it (:func:`approve_withdrawal`:
@@ -1041,11 +1071,7 @@ def approve_withdrawal(store, actor: User, tc_id: int) -> TableCalibrationWithdr
     ``withdraw`` audit event)."""
     require(actor, "reviewer")
     with store.writing() as s:
-        tc = _entry_for_withdrawal(s, tc_id)
-        asked = pending_withdrawal(s, tc.id)
-        if asked is None:
-            raise GonioError(f"no withdrawal of table calibration {tc.id} is asked for",
-                             key="table_calibration")
+        tc, asked = _pending_withdrawal_or_refused(s, tc_id)
         if asked["asked_by_id"] == actor.id:
             raise GonioError("the person who asked for the withdrawal may not approve it "
                              "(another person approves a withdrawal)", key="role")
@@ -1075,11 +1101,7 @@ def decline_withdrawal(store, actor: User, tc_id: int, reason: str = "") -> None
         raise GonioError("this needs the technician or reviewer role", key="role")
     reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True)
     with store.writing() as s:
-        tc = _entry_for_withdrawal(s, tc_id)
-        asked = pending_withdrawal(s, tc.id)
-        if asked is None:
-            raise GonioError(f"no withdrawal of table calibration {tc.id} is asked for",
-                             key="table_calibration")
+        tc, asked = _pending_withdrawal_or_refused(s, tc_id)
         if asked["asked_by_id"] != actor.id and not actor.has("reviewer"):
             raise GonioError("this needs the reviewer role (or the person who asked)",
                              key="role")

@@ -99,6 +99,31 @@ def _one_line(capsys) -> str:
     return err
 
 
+@pytest.fixture
+def refused_until_registered(capsys):
+    """``check(attempt, data)``: ``attempt()`` (a command line's exit code, or an API call)
+    while the register at ``data`` does not hold the run's table calibration is refused —
+    exit 2 with one line, or one GonioError line — naming the register command and the
+    file's digest, and nothing is recorded; then the file is registered (:func:`_register`)
+    and the entry's id returned."""
+    def check(attempt, data: Path) -> int:
+        capsys.readouterr()
+        try:
+            assert attempt() == 2
+            msg = _one_line(capsys)
+        except GonioError as exc:
+            msg = str(exc)
+            assert "\n" not in msg, msg
+        assert "not in the register" in msg and REGISTER in msg and SHA[:16] in msg, msg
+        st = open_store(None, data)
+        try:
+            assert n_calibrations(st) == 0
+        finally:
+            st.close()
+        return _register(data)
+    return check
+
+
 def test_the_run_records_the_file_it_used(cli_run):
     """The premise, checked from outside: the run's results.json records the file's hashlib
     digest and the name it was given under; the output folder holds no copy of it."""
@@ -146,7 +171,8 @@ def test_import_with_another_file_refused(cli_run, tmp_path, capsys):
         st.close()
 
 
-def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
+def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys,
+                                                 refused_until_registered):
     """--table-calibration FILE (the run's bytes), the table ticked (--lab's [[standards]]):
     while the register does not hold the file, exit 2, one line naming the register command,
     nothing recorded; once it is registered, exit 0, the calibration keeps the file (hashlib
@@ -159,16 +185,8 @@ def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
     data = tmp_path / "data"
     _store_with_table(data)
     lab = _lab(tmp_path)
-    capsys.readouterr()
-    assert _import(data, out, readings, "--table-calibration", str(tc), "--lab", str(lab)) == 2
-    err = _one_line(capsys)
-    assert "not in the register" in err and REGISTER in err and SHA[:16] in err, err
-    st = open_store(None, data)
-    try:
-        assert n_calibrations(st) == 0
-    finally:
-        st.close()
-    entry = _register(data)
+    entry = refused_until_registered(lambda: _import(
+        data, out, readings, "--table-calibration", str(tc), "--lab", str(lab)), data)
     assert _import(data, out, readings, "--table-calibration", str(tc), "--lab", str(lab)) == 0
     capsys.readouterr()
     st = open_store(None, data)
@@ -211,7 +229,7 @@ def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
         st.close()
 
 
-def test_import_takes_a_copy_in_the_folder(cli_run, tmp_path):
+def test_import_takes_a_copy_in_the_folder(cli_run, tmp_path, refused_until_registered):
     """A copy of the file under the name the run used, put in the output folder, the table
     ticked (the laboratory file's [[standards]]): while the register does not hold the file
     the import is refused, one line naming the register command, nothing recorded; once it
@@ -228,14 +246,8 @@ def test_import_takes_a_copy_in_the_folder(cli_run, tmp_path):
     st = open_store(None, tmp_path / "data")
     try:
         _with_table(st)                                     # the table RT-07, nothing registered
-        with pytest.raises(GonioError) as exc:
-            import_output_folder(st, folder, readings=readings, protocol=SMALL_PROTOCOL,
-                                 lab=lab)
-        msg = str(exc.value)
-        assert "\n" not in msg and "not in the register" in msg and REGISTER in msg, msg
-        assert SHA[:16] in msg, msg
-        assert n_calibrations(st) == 0
-        entry = register_table(st, TABLE, "RT-07 cal.csv").id
+        entry = refused_until_registered(lambda: import_output_folder(
+            st, folder, readings=readings, protocol=SMALL_PROTOCOL, lab=lab), tmp_path / "data")
         (folder / NAME).write_bytes(TABLE + b"\n")
         with pytest.raises(GonioError, match="not in the folder: give it with "
                                              "--table-calibration"):
@@ -273,7 +285,8 @@ def test_table_calibration_for_a_run_that_used_none_refused(cli_run, bench_readi
         st.close()
 
 
-def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, capsys):
+def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, capsys,
+                                        refused_until_registered):
     """``gonio calibrate --table-calibration FILE --lab LAB --record``, the table ticked (the
     laboratory file's [[standards]]): while the register does not hold the file, exit 2, one
     line naming the register command, nothing recorded; once registered, the calibration
@@ -293,16 +306,7 @@ def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, 
                      "--table-calibration", str(tc), "--lab", str(lab),
                      "--out", str(tmp_path / out), "--record", "--data", str(data)])
 
-    capsys.readouterr()
-    assert record("run0") == 2
-    err = _one_line(capsys)
-    assert "not in the register" in err and REGISTER in err and SHA[:16] in err, err
-    st = open_store(None, data)
-    try:
-        assert n_calibrations(st) == 0
-    finally:
-        st.close()
-    entry = _register(data)
+    entry = refused_until_registered(lambda: record("run0"), data)
     assert record("run") == 0
     st = open_store(None, data)
     try:
