@@ -390,3 +390,57 @@ def test_dcc_coverage_probability_is_the_stated_one(issued):
                 d = Decimal(t)
                 assert -d.as_tuple().exponent <= 5, t          # 99.999 % at most
                 assert any(abs(float(d) - p) <= 0.01 for p in ps), (t, ps)
+
+
+def test_dcc_value_is_the_stated_value_with_its_sign(issued):
+    """Every DCC quantity of an item's value holds the number the certificate states, sign
+    and digits: a negative mean or bias (the triad's M_yx, b_y …), and a non-negative
+    item whose bias-corrected estimate fell below zero (the optical C_g at this seed, stated
+    "≤ upper" with its note), are written with their minus sign, never as the interval's 0;
+    worked out here from results.json's float and the printed decimals of the certificate's
+    span (Decimal half-up, an independent rounding)."""
+    from decimal import ROUND_HALF_UP, Decimal
+
+    from gonio.report.i18n import minus_sign
+
+    res, html = issued["res"], issued["out"]["en"]["html"]
+    negative = 0
+    for lang in ("en", "zh"):
+        for real in issued["out"][lang]["dcc"].iter(f"{{{SI_NS}}}real"):
+            prev = real.getprevious()
+            m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value rule=", prev.text or "") \
+                if isinstance(prev, etree._Comment) else None
+            if not m or "factor=" in prev.text:
+                continue
+            key = m.group(1)
+            it = res["items"][key]
+            got = real.find("si:value", NS).text
+            places = len(got.partition(".")[2]) if "e" not in got else None
+            if places is None:
+                continue               # a power of ten: checked by the tests above
+            want = Decimal(repr(it["value"])).quantize(Decimal(1).scaleb(-places),
+                                                       rounding=ROUND_HALF_UP)
+            assert Decimal(got) == want, (lang, key, got, it["value"])
+            if it["value"] < 0 and want != 0:
+                negative += 1
+                assert got.startswith("-"), (lang, key, got)
+                # the certificate prints the same signed digits, or states the bound alone
+                span = re.findall(r'data-src="items\.' + key + r'\.value" data-rule="[^"]+">'
+                                  r'([^<]*)<', html)
+                assert not span or minus_sign(got) in span or got in span, (key, got, span)
+    if issued["spec"] in ("ogam-draft", "triad-alignment"):
+        assert negative, "no negative item in this demo: the sign is not tested"
+
+
+def test_dcc_real_keeps_a_value_below_its_interval():
+    """gonio.report.dcc.real writes the stated value as given, also below its interval."""
+    from gonio.report.dcc import new_document, real
+    from gonio.report.stated import Num
+
+    root = new_document()
+    r = real(root, Num("-0.000015", "items.x.value", "dec6"), "%",
+             interval=("0.000000", "0.000038"), u_std="0.000020", p=0.95)
+    assert r.find("si:value", NS).text == "-0.000015"
+    ci = r.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+    assert (ci.find("si:intervalMin", NS).text, ci.find("si:intervalMax", NS).text) == \
+        ("0.000000", "0.000038")

@@ -44,12 +44,14 @@ not, so a specification's calibrating modules stay light.
 from __future__ import annotations
 
 from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
-                              element, influence_conditions, label_translator, list_quantity,
+                              element, environment_conditions, influence_conditions,
+                              label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.figures import (HTML_FIGSIZE, empty_panel, figure_svg, legend_above,
                                   mpl_style, plain_axes, plain_log_ticks)
-from gonio.report.header import (certificate_id, conformity_section, decision_rule_blocks,
+from gonio.report.header import (certificate_id, condition_text, conformity_section,
+                                 decision_rule_blocks,
                                  is_draft, meta_text, opening_blocks, signature_blocks)
 from gonio.report.i18n import (clause_text, coverage_text, display, display_number,
                                display_uncertainty, finding_text, labels, parse_display,
@@ -64,9 +66,10 @@ from gonio.report.text import clean_tree
 
 __all__ = [
     "Block", "DCC_CONFORMITY", "HTML_FIGSIZE", "NoBreakText", "Num", "administrative_data",
-    "bilingual", "certificate_id", "clause_text", "clean_tree",
+    "bilingual", "certificate_id", "clause_text", "clean_tree", "condition_text",
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
+    "environment_conditions",
     "no_probability_note", "interval_band_note", "declaration_parts", "interval_legend",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",

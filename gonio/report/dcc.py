@@ -134,17 +134,17 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
     with ``note`` (e.g. ``factor=…`` of a unit conversion) appended. An item stated by its
     coverage interval (``interval`` the stated ends, ``u_std`` its standard uncertainty,
     ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty; its
-    si:value is never a point outside that interval (:func:`value_in_interval`)."""
-    shown, moved = dsi_decimal(str(value)), False
-    if interval is not None:
-        shown, moved = value_in_interval(shown, interval)
+    si:value is the stated value as the certificate rounds it, sign and digits kept, also
+    where it lies outside that interval (a non-negative quantity whose bias-corrected
+    estimate fell below zero is stated by its upper bound alone, "≤ upper (interval [0,
+    upper])": its si:value is that signed estimate, never a 0 nobody measured; the
+    statement is the interval, and the quantity's description says so)."""
+    shown = dsi_decimal(str(value))
     if isinstance(value, Num):
-        # a value moved to the interval's lower end names that number as its source
-        src = (value.src.rsplit(".value", 1)[0] + ".uncertainty.interval.0" if moved
-               else value.src)
-        note += " (the estimate fell below the interval: si:value its lower end)" if moved \
-            else ""
-        parent.append(etree.Comment(f" src={src} rule={value.rule}{note} "))
+        below = interval is not None and float(shown) < float(dsi_decimal(interval[0]))
+        note += (" (the estimate, below its interval's lower end: the statement is the "
+                 "interval)") if below else ""
+        parent.append(etree.Comment(f" src={value.src} rule={value.rule}{note} "))
     r = element(parent, "si:real")
     if label:
         element(r, "si:label", label)
@@ -176,26 +176,6 @@ def stated_p(p) -> str:
     from gonio.result.statement import p_text
 
     return str(Decimal(p_text(float(p))).scaleb(-2))
-
-
-def value_in_interval(value: str, interval: tuple[str, str]) -> tuple[str, bool]:
-    """The si:value of an item stated by its coverage interval alone, and whether it was
-    moved: the value as stated where it lies in the interval, else the interval's lower end
-    (a non-negative quantity whose estimate fell below zero is stated by its upper bound
-    alone, "≤ upper (interval [0, upper])": the certificate states no value outside the
-    interval, so the DCC carries none either; the interval's lower end 0, the nearest
-    possible value, is the value of that statement, and results.json keeps the signed
-    estimate).
-
-    >>> value_in_interval("-0.000016", ("0.000000", "0.000040"))
-    ('0.000000', True)
-    >>> value_in_interval("0.112", ("0.066", "0.204"))
-    ('0.112', False)
-    """
-    lo = dsi_decimal(interval[0])
-    if float(value) < float(lo):
-        return lo, True
-    return value, False
 
 
 def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None,
@@ -521,6 +501,31 @@ def measurement_result(root, name: str, *, method: str, norm: str,
             element(ident, "dcc:issuer", "calibrationLaboratory")
             element(ident, "dcc:value", s["identifier"])
     return mr
+
+
+def environment_conditions(md: dict, lab: dict | None, temperature_name: str = "temperature"
+                           ) -> list[tuple]:
+    """The (name, value, unit) influence conditions of the certificate's environment rows
+    (:func:`gonio.report.header.opening_blocks`): the laboratory file's temperature and
+    humidity, else the readings' metadata, each with the certificate's digits
+    (:func:`gonio.report.header.condition_text`)."""
+    from gonio.report.header import condition_text
+
+    env = (lab or {}).get("environment") or {}
+    # the records' environment taken from the readings' metadata is stated as such
+    tag = " (taken from the readings' metadata)" if env.get("source") == "readings" else ""
+    out: list[tuple] = []
+    t, tag_t = env.get("temperature_c"), tag
+    if t is None:
+        t, tag_t = md.get("temperature_c") or md.get("room_temperature_c"), ""
+    if t not in (None, ""):
+        out.append((temperature_name + tag_t, condition_text(t), "degC"))
+    h, tag_h = env.get("humidity_pct"), tag
+    if h is None:
+        h, tag_h = md.get("humidity_pct"), ""
+    if h not in (None, ""):
+        out.append(("relative humidity" + tag_h, condition_text(h), "%"))
+    return out
 
 
 def influence_conditions(mr, conds: list[tuple]) -> None:

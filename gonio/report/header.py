@@ -117,6 +117,17 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str,
     return rows
 
 
+def condition_text(v) -> str:
+    """An environment condition (temperature, humidity) as every output states it: the
+    number as the laboratory file or the readings give it, to at most 6 significant digits
+    (the certificate's text; the DCC writes the same digits).
+
+    >>> condition_text(20.1), condition_text(45.0), condition_text("22.50"), condition_text(20)
+    ('20.1', '45', '22.5', '20')
+    """
+    return f"{float(v):g}"
+
+
 def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
     """Temperature and humidity: the lab file's, else the readings file's. With a lab file,
     a value taken from the readings (none in ``[environment]``, or its ``source =
@@ -127,9 +138,10 @@ def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
     said = tagged if env.get("source") == "readings" else ""
     t, h = env.get("temperature_c"), env.get("humidity_pct")
     t_md = md.get("temperature_c") or md.get("room_temperature_c")
-    t_txt = f"{t:g} °C{said}" if t is not None else (f"{t_md} °C{tagged}" if t_md else ns)
-    h_txt = f"{h:g} %{said}" if h is not None else (f"{md['humidity_pct']} %{tagged}"
-                                                   if md.get("humidity_pct") else ns)
+    t_txt = f"{condition_text(t)} °C{said}" if t is not None else (
+        f"{condition_text(t_md)} °C{tagged}" if t_md else ns)
+    h_txt = f"{condition_text(h)} %{said}" if h is not None else (
+        f"{condition_text(md['humidity_pct'])} %{tagged}" if md.get("humidity_pct") else ns)
     return [(L["temperature"], t_txt), (L["humidity"], h_txt)]
 
 

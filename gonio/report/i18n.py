@@ -26,7 +26,7 @@ from decimal import Decimal
 
 from gonio.errors import GonioError
 from gonio.result.statement import (decimals_at_U, decimals_for_sig, k_text, nu_text,  # noqa: F401
-                                    p_relation, p_text, round_half_up, state)
+                                    p_relation, p_text, round_half_up, state, unit_text_in)
 # (the one rule: gonio.result.statement)
 
 #: Languages the certificate can be written in.
@@ -154,12 +154,8 @@ LABELS: dict[str, dict[str, str]] = {
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
     # units as shown
-    "u_counts/deg": {"en": "counts/°", "zh": "脉冲数/(°)"},
-    "u_%": {"en": "%", "zh": "%"},
-    "u_deg/h": {"en": "°/h", "zh": "(°)/h"},
-    "u_deg/s": {"en": "°/s", "zh": "(°)/s"},
-    "u_arcsec": {"en": "″", "zh": "″"},
-    "u_ppm": {"en": "ppm", "zh": "ppm"},
+    **{f"u_{u}": {lg: unit_text_in(u, lg) for lg in ("en", "zh")}
+       for u in ("counts/deg", "%", "deg/h", "deg/s", "arcsec", "ppm")},
     # figures
     "lg_U": {"en": "U", "zh": "U"},
     "no_data": {"en": "not measured", "zh": "未测"},

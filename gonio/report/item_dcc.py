@@ -26,7 +26,8 @@ import re
 
 from gonio.errors import GonioError
 from gonio.report.dcc import (administrative_data, stated_p, conformity_statements,
-                              element, measurement_result, new_document, not_measured_quantity,
+                              element, environment_conditions, influence_conditions,
+                              measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
 from gonio.report.stated import item_nums
@@ -101,6 +102,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             {"name": str(md.get("bench") or md.get("table") or "rate table"),
              "identifier": "", "accuracy": "", "certificate": "",
              "traceability": "none (virtual bench)" if lab is None else "not stated"}])
+    influence_conditions(mr, environment_conditions(md, lab))
     results = element(mr, "dcc:results")
     for key, it in items.items():
         r = element(results, "dcc:result", id=f"result-{key}")

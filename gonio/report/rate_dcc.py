@@ -45,7 +45,7 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (administrative_data, conformity_statements,
+from gonio.report.dcc import (administrative_data, conformity_statements, environment_conditions,
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display, labels
@@ -124,19 +124,7 @@ def _plain(v: float) -> str:
 
 def _conditions(res: dict, lab: dict | None) -> list[tuple]:
     md = res.get("metadata", {})
-    env = (lab or {}).get("environment") or {}
-    # the records' environment taken from the readings' metadata is stated as such
-    tag = " (taken from the readings' metadata)" if env.get("source") == "readings" else ""
-    out: list[tuple] = []
-    t = env.get("temperature_c")
-    if t is None:
-        t, tag_t = md.get("room_temperature_c"), ""
-    else:
-        tag_t = tag
-    if t not in (None, ""):
-        out.append(("room temperature" + tag_t, display("sig4", float(t)), "degC"))
-    if env.get("humidity_pct") is not None:
-        out.append(("relative humidity" + tag, display("sig3", env["humidity_pct"]), "%"))
+    out: list[tuple] = environment_conditions(md, lab, "room temperature")
     if md.get("supply_nominal_v") not in (None, ""):
         out.append(("nominal supply voltage", _plain(md["supply_nominal_v"]), "",
                     r"\volt"))
@@ -221,7 +209,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
 def _below_zero_text(n: dict) -> str | None:
     """The certificate's statement of a non-negative item whose estimate fell below zero
     (its upper bound alone and the note), the description beside the DCC's value, which
-    is then the interval's lower end (:func:`gonio.report.dcc.value_in_interval`)."""
+    is the signed estimate as the certificate rounds it (:func:`gonio.report.dcc.real`)."""
     st = n.get("statement")
     return st.text() if st is not None and st.below_zero else None
 

@@ -230,15 +230,31 @@ def declaration_parts(c, t: dict) -> tuple[str, str]:
     return acc, pfa
 
 
-def no_probability_note(decided, L: dict, name_of) -> str:
-    """The note under a conformity table naming the items for which no probability is given
-    (:func:`conformity_texts`'s ``no_p``), or "". ``decided``: (key, conformity) pairs."""
-    keys = [k for k, c in decided if c and conformity_texts(c, None, L)["no_p"]]
+def no_probability_note(decided, L: dict, name_of, with_pc: bool = True) -> str:
+    """The note under a conformity table explaining its "—": it names the items for which no
+    probability is given (:func:`conformity_texts`'s ``no_p``) and whose row prints a "—"
+    (the probability-of-conformance column, where the table has one, ``with_pc``; the
+    specific false-accept probability's, where no bound is given there either), or "" (no
+    "—" printed, no note). ``decided``: (key, conformity) pairs."""
+    def dash(c) -> bool:
+        t = conformity_texts(c, None, L)
+        if not t["no_p"]:
+            return False
+        pc = c.get("conformance_probability") if isinstance(c, dict) else getattr(
+            c, "conformance_probability", None)
+        return (with_pc and pc is None) or str(t["pfa"]).strip() == "—"
+
+    keys = [k for k, c in decided if c and c_outcome(c) and dash(c)]
     if not keys:
         return ""
     sep = "、" if "c_no_p_note" in L and L["c_no_p_note"].startswith("“—”：") else ", "
     return L.get("c_no_p_note", "“—”: no probability is stated for {items}.").format(
         items=sep.join(name_of(k) for k in keys))
+
+
+def c_outcome(c):
+    """A decision's outcome (a Conformity or its results.json dict), None where none."""
+    return c.get("outcome") if isinstance(c, dict) else getattr(c, "outcome", None)
 
 
 def interval_band_note(decided, L: dict, name_of, unit_of) -> str:

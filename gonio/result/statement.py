@@ -337,11 +337,18 @@ def p_text(p: float | None) -> str | None:
 
 
 #: results.json unit → its printed SI form (degree, hour, second of arc: accepted for use with
-#: the SI, SI Brochure 9th ed. table 8). Units not listed print as written.
+#: the SI, SI Brochure 9th ed. table 8), the one source of every printed page's unit text
+#: (certificate, web page; the Chinese page's own forms: :data:`UNIT_TEXT_ZH`). Units not
+#: listed print as written. results.json, items.csv and summary.txt keep the unit key
+#: itself; the DCC its D-SI form (:data:`DSI_UNITS`).
 UNIT_TEXT: dict[str, str] = {
     "arcsec": "″", "deg": "°", "deg/h": "°/h", "deg/s": "°/s", "degC": "°C",
-    "counts/deg": "1/°", "one": "", "1": "", "1/°C": "°C⁻¹", "%/°C": "%/°C",
+    "counts/deg": "counts/°", "one": "", "1": "", "1/°C": "°C⁻¹", "%/°C": "%/°C",
 }
+
+#: The units a Chinese page prints in its own form (JJF 1059.1's "(°)/h": a unit symbol
+#: after a number-like symbol is bracketed), else :data:`UNIT_TEXT`'s.
+UNIT_TEXT_ZH: dict[str, str] = {"counts/deg": "脉冲数/(°)", "deg/h": "(°)/h", "deg/s": "(°)/s"}
 
 #: results.json unit → (D-SI 2.2 unit, factor applied to value and U). D-SI has no unit for
 #: the standard acceleration of gravity, so per-g units are written per m s⁻² (÷ g_n).
@@ -375,6 +382,17 @@ def unit_text(unit: str | None) -> str:
     if not unit:
         return ""
     return UNIT_TEXT.get(unit, unit)
+
+
+def unit_text_in(unit: str | None, lang: str) -> str:
+    """A results.json unit as a page in ``lang`` ("en", "zh") prints it.
+
+    >>> unit_text_in("counts/deg", "en"), unit_text_in("counts/deg", "zh"), unit_text_in("%", "zh")
+    ('counts/°', '脉冲数/(°)', '%')
+    """
+    if lang == "zh" and unit in UNIT_TEXT_ZH:
+        return UNIT_TEXT_ZH[unit]
+    return unit_text(unit)
 
 
 def signed_text(x: float, decimals: int = 2) -> str:

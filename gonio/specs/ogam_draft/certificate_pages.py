@@ -328,7 +328,7 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
         add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
         note = no_probability_note([(e["item"], e["conformity"]) for e in conf], L,
-                                   lambda k: L[k])
+                                   lambda k: L[k], with_pc=False)   # no such column here
         if note:
             add("p", [note])
 

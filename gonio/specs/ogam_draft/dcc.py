@@ -23,7 +23,7 @@ from typing import Any
 from gonio.atomic import write_bytes
 from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               conformity_texts, declaration_parts, display, element,
-                              influence_conditions, labels, list_quantity,
+                              environment_conditions, influence_conditions, labels, list_quantity,
                               measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
@@ -112,16 +112,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         root, "Calibration of an optical-gyroscope angle measuring instrument",
         method=method_text(res, lab, "en"),
         norm=norm, standards=stds)
-    env = lab_.get("environment") or {}
-    # the records' environment taken from the readings' metadata is stated as such
-    tag = " (taken from the readings' metadata)" if env.get("source") == "readings" else ""
-    conds = []
-    if env.get("temperature_c") is not None:
-        conds.append(("temperature" + tag, display("sig4", env["temperature_c"]), "degC"))
-    elif md.get("temperature_c"):
-        conds.append(("temperature", display("sig4", float(md["temperature_c"])), "degC"))
-    if env.get("humidity_pct") is not None:
-        conds.append(("relative humidity" + tag, display("sig3", env["humidity_pct"]), "%"))
+    conds = environment_conditions(md, lab)
     influence_conditions(mr, conds)
 
     results = element(mr, "dcc:results")
@@ -148,7 +139,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
-        elif s["below_zero"]:     # its bound alone (si:value the interval's lower end), and why
+        elif s["below_zero"]:     # its bound alone (si:value the signed estimate), and why
             quantity(data, L[name], s["value"], item["unit"],
                      description="; ".join(d for d in (LABELS["below_zero"]["en"],
                                                        _range_table_text(res, name, L)) if d),

@@ -40,7 +40,8 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
 import math
 
-from gonio.kit.render import (Num, conformity_texts, coverage_text, declaration_parts, display,
+from gonio.kit.render import (Num, condition_text, conformity_texts, coverage_text,
+                              declaration_parts, display,
                               display_number, interval_band_note, item_nums, labels, num,
                               parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
@@ -463,7 +464,7 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
         t_meas = md["temperature_c"]
     rows.append((L["m_temp"], L["m_temp_v"].format(
         t=display("pos", m["temperature_c"]), tol=display("pos", m["temperature_tolerance_c"]),
-        m=f"{t_meas} °C" if t_meas not in (None, "") else ns)))
+        m=f"{condition_text(t_meas)} °C" if t_meas not in (None, "") else ns)))
     return rows
 
 
