@@ -408,16 +408,13 @@ def test_dcc_value_is_the_stated_value_with_its_sign(issued):
     for lang in ("en", "zh"):
         for real in issued["out"][lang]["dcc"].iter(f"{{{SI_NS}}}real"):
             prev = real.getprevious()
-            m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value rule=", prev.text or "") \
-                if isinstance(prev, etree._Comment) else None
+            m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value rule=s?dec(-?\d+)\b",
+                          prev.text or "") if isinstance(prev, etree._Comment) else None
             if not m or "factor=" in prev.text:
-                continue
-            key = m.group(1)
+                continue               # a power of ten or a unit conversion: tests above
+            key, places = m.group(1), int(m.group(2))
             it = res["items"][key]
             got = real.find("si:value", NS).text
-            places = len(got.partition(".")[2]) if "e" not in got else None
-            if places is None:
-                continue               # a power of ten: checked by the tests above
             want = Decimal(repr(it["value"])).quantize(Decimal(1).scaleb(-places),
                                                        rounding=ROUND_HALF_UP)
             assert Decimal(got) == want, (lang, key, got, it["value"])
