@@ -122,8 +122,8 @@ _CELL_FIELDS = {"U": r" ± (\S+)", "k": r"\bk = ([^,)\s]+)", "nu_eff": r"ν_eff 
 
 def cell_numbers(text: str) -> dict:
     """The numbers of one statement written on one line ("−0.7224 ± 0.0020 lsb/(°/s) (k = 2.2,
-    ν_eff = 14, p ≈ 95 %)", "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)", "upper bound: ≤
-    0.53 °/h (interval [0, 0.53], p ≈ 95 %); …"): field → its text, or the list of its texts
+    ν_eff = 14, p = 95 %)", "0.112 ″; interval [0.066, 0.204] ″ (p = 95 %)", "upper bound: ≤
+    0.53 °/h (interval [0, 0.53], p = 95 %); …"): field → its text, or the list of its texts
     where the line holds it more than once (a second statement); ``value`` is the first word
     unless the line opens with an upper bound."""
     out: dict = {}

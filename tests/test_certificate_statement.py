@@ -137,7 +137,7 @@ def test_E_interval_form_identical_in_every_output(run):
     q = Decimal(1).scaleb(-dec)
     hi_t = str(Decimal(repr(hi)).quantize(q, rounding=ROUND_CEILING))
     lo_t = str(Decimal(repr(lo)).quantize(q, rounding=ROUND_FLOOR))
-    iv = f"≤ {hi_t} (p ≈ 95 %)" if lo == 0 else f"[{lo_t}, {hi_t}] (p ≈ 95 %)"
+    iv = f"≤ {hi_t} (p = 95 %)" if lo == 0 else f"[{lo_t}, {hi_t}] (p = 95 %)"
     mt = half_up(m, dec)
     signed = half_up(E[j], dec)
     signed = signed if signed.startswith("-") else "+" + signed
@@ -181,7 +181,7 @@ def test_summary_and_certificate_use_the_same_numbers(run):
 def test_coverage_probability_beside_every_U(run):
     page = visible_text((run["dir"] / "en" / "certificate.html").read_text())
     # k: fixed by the laboratory or t95(ν_eff) (1.96 with E's per-point r of pooled ν)
-    assert re.search(r"U = [\d.]+″, k = [\d.]+, coverage probability approximately 95 %", page)
+    assert re.search(r"U = [\d.]+″, k = [\d.]+, coverage probability 95 %", page)
     summary = (run["dir"] / "summary.txt").read_text()
     for line in summary.splitlines():
         if re.search(r"\bU = |\d \(k = ", line):
@@ -199,7 +199,7 @@ def test_per_item_uncertainty_is_shown_when_results_carry_it(run):
     st = stated_item(res, "scale_factor")
     assert st["U"].text == "0.025" and st["k"].text == "2" and st["p"] == "95"
     assert st["value"].text == half_up(res["items"]["scale_factor"]["value"], 3)   # U's place
-    assert "0.025 (k = 2, p ≈ 95 %)" in summary_text(res)
+    assert "0.025 (k = 2, p = 95 %)" in summary_text(res)
     bare = json.loads(json.dumps(run["results"]))
     bare["items"]["scale_factor"]["uncertainty"] = None   # an item without its uncertainty
     without = stated_item(bare, "scale_factor")

@@ -91,10 +91,10 @@ def e_row(summary: str) -> str:
 
 
 def states_interval(summary: str, hi: str) -> bool:
-    """summary.txt's E row states the interval alone: "≤ hi (p ≈ 95 %)", no U, no k."""
+    """summary.txt's E row states the interval alone: "≤ hi (p = 95 %)", no U, no k."""
     row = e_row(summary)
     cols = re.split(r"\s{2,}", row.strip())
-    return f"≤ {hi} (p ≈ 95 %)" in row and "k =" not in row and cols[-2] == "—"
+    return f"≤ {hi} (p = 95 %)" in row and "k =" not in row and cols[-2] == "—"
 
 
 def test_every_output_states_the_hand_interval(demo):

@@ -32,7 +32,7 @@ def test_interval_ends_rounded_outward(value, f_lo, f_hi):
     L, H = (_num(x, s.exponent) for x in s.interval)
     assert L <= Decimal(repr(lo)) and H >= Decimal(repr(hi))        # never narrower
     assert L >= 0 and s.U is None and s.k is None
-    assert " ± " not in s.text() and "p ≈ 95 %" in s.text()
+    assert " ± " not in s.text() and "p = 95 %" in s.text()
 
 
 @pytest.mark.parametrize("value,iv", [(1.0, (2.0, 3.0)), (1.0, (1.0, 1.0)), (1.0, (3.0, 0.5)),
@@ -60,7 +60,7 @@ def test_negative_end_of_non_negative_quantity_refused():
 @pytest.mark.parametrize("nu", [2, 4, 9])
 def test_std_dev_item_stated_by_chi2_interval_covers(nu):
     """K_r, B_r, Noise RMS: the one statement is σ's one-sided χ² interval [0, hi] with
-    p ≈ 95 %; it covers σ in 95 % of simulated normal samples (scipy.stats.binomtest), and
+    p = 95 %; it covers σ in 95 % of simulated normal samples (scipy.stats.binomtest), and
     the item's text has no ± U and no k (k = U/u_c was 6.83 at ν = 2)."""
     rng = np.random.default_rng(nu)
     trials, hits = 4000, 0
@@ -74,7 +74,7 @@ def test_std_dev_item_stated_by_chi2_interval_covers(nu):
             "uncertainty": u.to_json()}
     text = item_statement(item).text()
     assert " ± " not in text and "k =" not in text and "upper bound: ≤" in text
-    assert "p ≈ 95 %" in text
+    assert "p = 95 %" in text
 
 
 def test_half_range_upper_limit_covers():
@@ -100,4 +100,4 @@ def test_half_range_upper_limit_covers():
                         "uncertainty": {"U": 0.2 * factor - 0.2, "k": None, "nu_eff": 2,
                                         "coverage_probability": 0.95,
                                         "interval": [0.0, 0.2 * factor]}})
-    assert s.text() == "0.20 °/s; upper bound: ≤ 0.79 °/s (interval [0, 0.79], p ≈ 95 %)"
+    assert s.text() == "0.20 °/s; upper bound: ≤ 0.79 °/s (interval [0, 0.79], p = 95 %)"

@@ -73,7 +73,7 @@ def test_rule_items_state_one_probability(study_runs, tmp_path):
     """7.2.6 / 7.2.7: p is the interval's own probability under the outcome distribution in
     the item's details (whole grid steps: ≥ 95 %), results.json holds it and the one
     statement every output prints (item_statement) states it."""
-    from gonio.result.statement import item_statement, p_text
+    from gonio.result.statement import item_statement, p_relation, p_text
 
     seen = 0
     for r, _ in study_runs[0]:
@@ -90,7 +90,7 @@ def test_rule_items_state_one_probability(study_runs, tmp_path):
             got = it["uncertainty"]["coverage_probability"]
             assert got == pytest.approx(p / sum(pmf.values()), rel=1e-9)
             assert got >= 0.95 - 1e-9
-            assert f"p ≈ {p_text(got)} %" in item_statement(it).text()
+            assert f"p {p_relation(p_text(got))} {p_text(got)} %" in item_statement(it).text()
             seen += 1
     assert seen >= 2
 

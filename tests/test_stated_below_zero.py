@@ -2,7 +2,7 @@
 checked from the outside (results.json, certificate HTML/PDF, summary.txt, the DCC):
 
 * a non-negative quantity whose bias-corrected estimate fell below zero (K_l, C_v, C_g) is
-  stated by its upper bound alone, "≤ upper (p ≈ 95 %)", with the note that the estimate fell
+  stated by its upper bound alone, "≤ upper (p = 95 %)", with the note that the estimate fell
   below zero; results.json keeps the signed estimate (the statement rule's
   ``below_zero_bound``);
 * a negative number is printed with U+2212 MINUS SIGN on the certificate (HTML, PDF), and

@@ -149,7 +149,7 @@ def test_p_is_stated_the_same_everywhere():
     from a distribution keeps two significant digits."""
     from decimal import Decimal
     assert p_text(0.9545) == "95.45" and Decimal(p_text(0.9545)) / 100 == Decimal("0.9545")
-    assert coverage_text(0.9545) == "95.45 %" and coverage_text(0.95) == "approximately 95 %"
+    assert coverage_text(0.9545) == "95.45 %" and coverage_text(0.95) == "95 %" and coverage_text(0.98) == "approximately 98 %"
     assert coverage_text(0.9545, "zh") == "95.45 %"
     assert p_text(0.95) == "95" and p_text(0.99) == "99" and p_text(0.9973) == "99.73"
     assert p_text(0.9946477675623514) == "99" and p_text(0.981526203417951) == "98"

@@ -163,7 +163,7 @@ LABELS: dict[str, dict[str, str]] = {
     "south": {"en": "south", "zh": "正南"}, "east": {"en": "east", "zh": "正东"},
     "west": {"en": "west", "zh": "正西"},
     # the expanded uncertainty with its k and p (a DCC text of every specification)
-    "U_cell": {"en": "{U} (k = {k}, p ≈ {p} %)", "zh": "{U}（k = {k}，p ≈ {p} %）"},
+    "U_cell": {"en": "{U} (k = {k}, p {r} {p} %)", "zh": "{U}（k = {k}，p {r} {p} %）"},
     # where the coverage factor k comes from
     "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
@@ -560,15 +560,13 @@ def rule_at_U(U: float | None, fallback_sig: int = 3, value: float | None = None
 
 
 def coverage_text(p: float | None, lang: str = "en") -> str:
-    """"approximately 95 %" for a coverage probability 0.95 (JCGM 100 6.2.2), p as
-    :func:`~gonio.result.statement.p_text` states it (0.9545: "95.45", as results.json and
-    the DCC carry it).
+    """A coverage probability in words, p as :func:`~gonio.result.statement.p_text` states
+    it (0.9545: "95.45", as results.json and the DCC carry it): a p chosen as such
+    (:func:`~gonio.result.statement.p_relation` "=": 0.95, 0.9545) as it is, "95 %", any
+    other "approximately 98 %" (JCGM 100 6.2.2), as "p ≈ 98 %" in the tables.
 
-    A p chosen as such (:func:`~gonio.result.statement.p_relation` "="), 0.9545, is stated
-    as it is: "95.45 %".
-
-    >>> coverage_text(0.95), coverage_text(0.9545, "zh"), coverage_text(None)
-    ('approximately 95 %', '95.45 %', '—')
+    >>> coverage_text(0.95), coverage_text(0.9545, "zh"), coverage_text(0.98), coverage_text(None)
+    ('95 %', '95.45 %', 'approximately 98 %', '—')
     """
     if p is None:
         return "—"

@@ -161,7 +161,7 @@ def component_source(c: dict, L: dict, phrases=()) -> str:
 
 
 def factors_cell(n: dict, L: dict) -> list:
-    """"k = 1.97, ν_eff = 168, p ≈ 95 %" of one item as text and Num segments (a chosen p,
+    """"k = 1.97, ν_eff = 168, p = 95 %" of one item as text and Num segments (a chosen p,
     95.45 %, with "=": :func:`gonio.result.statement.p_relation`)."""
     seg: list = []
     if n["k"] is not None:

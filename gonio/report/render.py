@@ -256,7 +256,7 @@ _NO_START = set("。，、；：？！）」』】〉》)]}%,;:")
 _NO_END = set("（「『【〈《([{")
 
 
-#: A relation standing alone between spaces binds its two sides: "p ≈ 95 %", "k = 2.07".
+#: A relation standing alone between spaces binds its two sides: "p = 95 %", "k = 2.07".
 _RELATIONS = frozenset("≈=≤≥<>")
 
 
@@ -268,7 +268,7 @@ def _glue(tokens: list[str]) -> list[str]:
     >>> _glue(["k", "）", "。"]), _glue(["（", "a", "b"]), _glue(["≈ ", "95 ", "%)"])
     (['k）。'], ['（a', 'b'], ['≈ 95 %)'])
     >>> _glue(["0.012 ", "(k ", "= ", "2.07, ", "p ", "≈ ", "95 ", "%)"])
-    ['0.012 ', '(k = 2.07, ', 'p ≈ 95 %)']
+    ['0.012 ', '(k = 2.07, ', 'p = 95 %)']
     """
     out: list[str] = []
     carry = ""

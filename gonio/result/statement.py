@@ -60,7 +60,7 @@ which the quantity cannot take). Following GUM 4.3.9 / JCGM 101 7.7 (a coverage 
 contains only possible values) and the ISO 80000-1 way of stating a bound, the statement is
 **one** coverage interval, the interval value ± U truncated at zero, stated as an **upper
 bound**: ``upper`` = value + U rounded *up* at U's decimal place (so the bound is never
-understated), printed "≤ upper (interval [0, upper], p ≈ 95 %)"; "± U" and k are not
+understated), printed "≤ upper (interval [0, upper], p = 95 %)"; "± U" and k are not
 printed beside it (two statements of one item, one of them holding impossible values).
 Its coverage probability is at least the stated p (the part cut away holds no possible
 value). The value keeps U's decimal place; ``Statement.U`` and ``k`` are None and
@@ -73,7 +73,7 @@ an item as not measured with that reason; it is never printed as a negative boun
 ("≤ -4.0 s"). **A non-negative quantity whose estimate fell below zero while its interval
 does not** (a range or spread corrected for its bias, K_l, C_v, C_g: the correction can take
 the estimate below zero when the errors alone would spread the values more than they were
-measured to spread) is stated by its **upper bound alone**, "≤ upper (p ≈ 95 %)", with the
+measured to spread) is stated by its **upper bound alone**, "≤ upper (p = 95 %)", with the
 note that the estimate fell below zero (:func:`below_zero_bound`, ``Statement.below_zero``):
 a negative value printed beside its [0, upper] interval would state a value the quantity
 cannot take. results.json keeps the signed estimate (a later correction or a pooled
@@ -81,19 +81,19 @@ analysis needs it); every printed output (certificate, summary.txt, the web, the
 description) says the bound and the note. An empty acceptance interval of such a quantity (guard band wider than the
 limit) is likewise said in words, never as a negative limit
 (:func:`gonio.report.stated.conformity_texts`). Wording used by
-every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098], p ≈ 95 %)", zh "上限：≤
-0.098 °/s（区间 [0, 0.098]，p ≈ 95 %）". The issue-24 coverage studies check such items one-sidedly: the
+every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098], p = 95 %)", zh "上限：≤
+0.098 °/s（区间 [0, 0.098]，p = 95 %）". The issue-24 coverage studies check such items one-sidedly: the
 truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
 signed deviation) is declared ``nonnegative=False`` and is never given a bound.
 
 >>> s = state(5.99906, 0.00316, k=1.97414, nu_eff=58.7, p=0.95, unit="mV/(°/s)")
 >>> s.value, s.U, s.k, s.nu_eff, s.p, s.text()
-('5.9991', '0.0032', '1.97', '58', '95', '5.9991 ± 0.0032 mV/(°/s) (k = 1.97, ν_eff = 58, p ≈ 95 %)')
+('5.9991', '0.0032', '1.97', '58', '95', '5.9991 ± 0.0032 mV/(°/s) (k = 1.97, ν_eff = 58, p = 95 %)')
 >>> state(786.5, 160.0, k=2.0, unit="°/h").text()
 '790 ± 160 °/h (k = 2)'
 >>> t = state(0.01, 0.088, k=2.0, p=0.95, unit="°/s", nonnegative=True)
 >>> t.value, t.U, t.k, t.upper, t.text()
-('0.010', None, None, '0.098', '0.010 °/s; upper bound: ≤ 0.098 °/s (interval [0, 0.098], p ≈ 95 %)')
+('0.010', None, None, '0.098', '0.010 °/s; upper bound: ≤ 0.098 °/s (interval [0, 0.098], p = 95 %)')
 >>> state(2.1805064e-05, 1.3e-06, k=2).text()
 '2.18×10⁻⁵ ± 0.13×10⁻⁵ (k = 2)'
 >>> state(76434.8425925926, None, sig=8, unit="1").text()
@@ -281,19 +281,22 @@ def nu_text(nu: float | None) -> str | None:
 P_TEXT_MAX_DECIMALS: int = 3
 
 
-#: The coverage probabilities a procedure chooses exactly as the p of a normal distribution's
-#: k = 2 and k = 3 (EA-4/02 Annex E's t-factor tables): stated "p = 95.45 %", since the k are
-#: computed for that p (t_0.9545(ν)); any other p is stated "p ≈ …" (JCGM 100 6.2.2: an
-#: interval of about that coverage; the rate specifications' 95 %, a computed probability).
-CHOSEN_P_TEXTS = ("95.45", "99.73")
+#: The coverage probabilities a procedure chooses, for which every k and interval is computed:
+#: 95 % (k = t_0.95(ν) of the ν_eff stated, the normal 1.96 above the threshold, a JCGM 101
+#: convolution's k, a χ² or Monte Carlo interval, all for 95 % by construction) and the p of
+#: a normal distribution's k = 2 and k = 3 (EA-4/02 Annex E's t-factor tables, t_0.9545(ν)):
+#: stated "p = 95 %", "p = 95.45 %" in every output (en and zh). A probability computed from
+#: a distribution (the coverage an interval of whole grid steps reaches, 98 %, 99 %) is
+#: stated "p ≈ …" (JCGM 100 6.2.2: an interval of about that coverage).
+CHOSEN_P_TEXTS = ("95", "95.45", "99.73")
 
 
 def p_relation(p: str | None) -> str:
     """The relation sign a stated coverage probability (its :func:`p_text`) is printed with:
     "=" for a p chosen as such (:data:`CHOSEN_P_TEXTS`), else "≈".
 
-    >>> p_relation("95.45"), p_relation("95"), p_relation("99.7")
-    ('=', '≈', '≈')
+    >>> p_relation("95.45"), p_relation("95"), p_relation("99.7"), p_relation("98")
+    ('=', '=', '≈', '≈')
     """
     return "=" if p in CHOSEN_P_TEXTS else "≈"
 
@@ -482,7 +485,7 @@ class Statement:
         return self._x(self.upper) if self.upper is not None else None
 
     def factors(self) -> str:
-        """"k = 1.97, ν_eff = 58, p ≈ 95 %" (the parts known), or ""."""
+        """"k = 1.97, ν_eff = 58, p = 95 %" (the parts known), or ""."""
         parts = []
         if self.k is not None:
             parts.append(f"k = {self.k}")
@@ -499,10 +502,10 @@ class Statement:
 
     def interval_text(self, lang: str = "en", short: bool = False) -> str:
         """The coverage interval of an item stated by its interval (see :func:`state`), with
-        its probability: "upper bound: ≤ 0.53 °/h (interval [0, 0.53], p ≈ 95 %)" or
-        "interval [0.066, 0.204] ″ (p ≈ 95 %)"; "" for an item stated by U. ``short``: the
-        form of a table cell whose unit is in another column, "≤ 0.53 (p ≈ 95 %)" or
-        "[0.066, 0.204] (p ≈ 95 %)"."""
+        its probability: "upper bound: ≤ 0.53 °/h (interval [0, 0.53], p = 95 %)" or
+        "interval [0.066, 0.204] ″ (p = 95 %)"; "" for an item stated by U. ``short``: the
+        form of a table cell whose unit is in another column, "≤ 0.53 (p = 95 %)" or
+        "[0.066, 0.204] (p = 95 %)"."""
         if self.interval is None:
             return ""
         u = f" {self.unit}" if self.unit else ""
@@ -526,7 +529,7 @@ class Statement:
 
     def text(self, lang: str = "en") -> str:
         """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)", or for
-        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)"; a
+        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p = 95 %)"; a
         non-negative quantity whose estimate fell below zero: its upper bound and the note."""
         u = f" {self.unit}" if self.unit else ""
         sep = "；" if lang == "zh" else "; "
@@ -555,7 +558,7 @@ BELOW_ZERO_NOTE = {"en": "the estimate fell below zero",
 def below_zero_bound(st: Statement, value: float, nonnegative: bool) -> Statement:
     """The statement of a non-negative quantity whose estimate ``value`` fell below zero
     while its coverage interval [0, upper] reaches above it: its upper bound alone, "≤ upper
-    (p ≈ 95 %)", marked ``below_zero`` (every output then prints the bound and
+    (p = 95 %)", marked ``below_zero`` (every output then prints the bound and
     :data:`BELOW_ZERO_NOTE`, never the negative value beside an interval that starts at 0:
     GUM 4.3.9 / JCGM 101 7.7, a coverage interval and an estimate hold only possible values,
     and the estimate, unbiased or not, is not one). Any other statement is returned as it is.
@@ -605,10 +608,10 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     as a noise-free bench gives): it is stated as the value alone, "0", with no interval.
 
     >>> state_interval(0.112, (0.0662, 0.2038), p=0.95, unit="arcsec").text()
-    '0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)'
+    '0.112 ″; interval [0.066, 0.204] ″ (p = 95 %)'
     >>> s = state_interval(1.0, (0.0, 4.415), nu_eff=2, p=0.95, nonnegative=True, unit="°/h")
     >>> s.text(), s.U, s.k, s.upper
-    ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p ≈ 95 %)', None, None, '4.5')
+    ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p = 95 %)', None, None, '4.5')
     >>> state_interval(0.0, (0.0, 0.0), nonnegative=True, unit="s").text()
     '0 s'
     >>> state_interval(-0.5, (0.0, 2.04), nonnegative=True).text()   # a corrected range < 0
@@ -666,7 +669,7 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     >>> state(0.01, 0.088, nonnegative=False).upper is None
     True
     >>> state(175.0, 1200.0, k=2, p=0.95, nonnegative=True, unit="s").text()
-    '200 s; upper bound: ≤ 1400 s (interval [0, 1400], p ≈ 95 %)'
+    '200 s; upper bound: ≤ 1400 s (interval [0, 1400], p = 95 %)'
     >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
     'upper bound: ≤ 1.0 s (interval [0, 1.0]); the estimate fell below zero'
     >>> state(-5.0, 1.0, nonnegative=True, unit="s")
@@ -771,7 +774,7 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
 
     >>> item_statement({"value": 786.485, "unit": "°/h", "measured": True,
     ...                 "uncertainty": {"U": 159.4, "k": 2.38068, "nu_eff": 6.2, "p": 0.95}}).text()
-    '790 ± 160 °/h (k = 2.38, ν_eff = 6, p ≈ 95 %)'
+    '790 ± 160 °/h (k = 2.38, ν_eff = 6, p = 95 %)'
     >>> item_statement({"value": None, "unit": "s", "measured": False}).value
     '—'
     """

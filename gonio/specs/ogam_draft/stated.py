@@ -7,7 +7,7 @@ Contents
 :func:`item_uncertainty`     U, k and coverage probability of one item (or None)
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
                              position, U, k, p, or its one coverage interval
-:func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p ≈ 95 %)")
+:func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p = 95 %)")
 :func:`combined_k_note`      the note naming the items whose k is their budget's combined
                              distribution's (JCGM 101), not t95(ν_eff)
 :func:`conformity_for`       the conformity statements the laboratory's limits call for
@@ -44,7 +44,7 @@ from gonio.kit.render import (Num, condition_text, conformity_texts, coverage_te
                               declaration_parts, display,
                               display_number, interval_band_note, item_nums, labels, num,
                               parse_display, rule_at_U)
-from gonio.result.statement import decimals_for_sig, p_text, round_half_up
+from gonio.result.statement import decimals_for_sig, p_relation, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_PHYSICAL_ZH, BUDGET_SOURCES_ZH,
                                             ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
                                             LABELS, READING_NOTES_ZH, TITLES_EN)
@@ -226,8 +226,8 @@ def e_interval_segments(res: dict, L: dict) -> list:
 
 def interval_cell(st: dict, lang: str) -> str:
     """The coverage interval of an item stated by it (:func:`stated_item` ``interval``), in
-    the short form of a table cell whose unit is in another column: "≤ 0.021 (p ≈ 95 %)" or
-    "[0.066, 0.204] (p ≈ 95 %)"; "" for an item stated by U."""
+    the short form of a table cell whose unit is in another column: "≤ 0.021 (p = 95 %)" or
+    "[0.066, 0.204] (p = 95 %)"; "" for an item stated by U."""
     if st.get("interval") is None:
         return ""
     return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
@@ -359,10 +359,12 @@ def segments(template: str, **nums) -> list:
 
 
 def u_cell(st: dict, L: dict) -> list | str:
-    """The "U (k = 2, p ≈ 95 %)" cell of one item, as text and Num segments."""
+    """The "U (k = 2.02, p = 95 %)" cell of one item, as text and Num segments (p with its
+    relation sign, :func:`~gonio.result.statement.p_relation`)."""
     if st["U"] is None:
         return "—"
-    return segments(L["U_cell"], U=st["U"], k=st["k"] or "—", p=st["p"] or "—")
+    return segments(L["U_cell"], U=st["U"], k=st["k"] or "—", p=st["p"] or "—",
+                    r=p_relation(st["p"]))
 
 
 def band_note(res: dict, conf: list, L: dict) -> str:
@@ -492,7 +494,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         if st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
-                                         f"p ≈ {st['p'] or '—'} %)"
+                                         f"p {p_relation(st['p'])} {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
     fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
