@@ -441,3 +441,116 @@ def test_dcc_real_keeps_a_value_below_its_interval():
     ci = r.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
     assert (ci.find("si:intervalMin", NS).text, ci.find("si:intervalMax", NS).text) == \
         ("0.000000", "0.000038")
+
+
+def _page_text(html: str) -> str:
+    return html_lib.unescape(re.sub(r"<[^>]+>", "", html)).replace("\xa0", " ")
+
+
+def _cells(row_html: str) -> list[str]:
+    return [_page_text(c).strip() for c in re.findall(r"<t[dh][^>]*>(.*?)</t[dh]>", row_html,
+                                                       re.S)]
+
+
+def test_environment_conditions_carry_the_certificates_digits(issued):
+    """The DCC's temperature and humidity are the numbers the certificate prints beside
+    "Temperature" / "Relative humidity" (digits and all: 20.1, never 20.10; 45, never 45.0),
+    in both languages."""
+    for lang in ("en", "zh"):
+        html = issued["out"][lang]["html"]
+        printed = {}
+        for row in re.findall(r"<tr>(.*?)</tr>", html, re.S):
+            cells = _cells(row)
+            if len(cells) == 2 and cells[0] in ("Temperature", "Relative humidity", "温度",
+                                                 "相对湿度"):
+                m = re.match(r"(−?[\d.]+) (°C|%)", cells[1])
+                if m:
+                    printed["degC" if m.group(2) == "°C" else "%"] = m.group(1)
+        assert set(printed) == {"degC", "%"}, (lang, printed)
+        seen = {}
+        for ic in issued["out"][lang]["dcc"].iter(f"{{{DCC_NS}}}influenceCondition"):
+            name = ic.find("dcc:name/dcc:content", NS).text
+            if "temperature" in name and "chamber" not in name or "humidity" in name:
+                v = ic.find(".//si:real/si:value", NS)
+                if v is not None:
+                    seen["%" if "humidity" in name else "degC"] = v.text
+        assert seen == {k: v.replace("−", "-") for k, v in printed.items()}, (lang, seen,
+                                                                             printed)
+
+
+def test_conformity_dash_note_only_where_a_dash_is_printed(issued):
+    """The note '“—”: no probability is stated for …' stands under the conformity table only
+    when a cell of the table prints "—", and names only items whose row prints one."""
+    for lang in ("en", "zh"):
+        html = issued["out"][lang]["html"]
+        at = html.find('id="conformity"')
+        if at < 0:
+            continue
+        table = html[at:html.index("</table>", at)]
+        rows = {r[0]: r for r in (_cells(x) for x in re.findall(r"<tr>(.*?)</tr>", table, re.S))
+                if r}
+        after = _page_text(html[html.index("</table>", at):])
+        head = "“—”: no probability is stated for " if lang == "en" else "“—”："
+        m = re.match(r"\s*(?:<[^>]*>)*\s*" + re.escape(head) + r"(.+?)[:：]", after)
+        dashed = {n for n, r in rows.items() if "—" in r[1:]}
+        if m is None:
+            continue
+        assert dashed, (lang, "a note explains a '—' no row prints", m.group(0)[:200])
+        for name in rows:
+            if name in m.group(1):
+                assert name in dashed, (lang, name, rows[name])
+
+
+def test_p_is_stated_one_way(issued):
+    """A p the procedure chooses (95 %, 95.45 %: every k and interval is computed for it) is
+    "p = …" in every output, en and zh: certificate, summary.txt and the DCC's texts; never
+    "p ≈ 95 %", "approximately 95 %" or "约 95 %". A computed p (98 %, 99 % of a grid) is
+    "p ≈ …"."""
+    from gonio.result.statement import CHOSEN_P_TEXTS
+
+    texts = {"summary": issued["summary"]}
+    for lang in ("en", "zh"):
+        texts[f"html-{lang}"] = _page_text(issued["out"][lang]["html"])
+        texts[f"dcc-{lang}"] = " ".join(
+            c.text or "" for c in issued["out"][lang]["dcc"].iter(f"{{{DCC_NS}}}content"))
+    assert "95" in CHOSEN_P_TEXTS
+    seen = 0
+    for where, t in texts.items():
+        t = t.replace("\xa0", " ")
+        assert not re.search(r"(approximately|约)\s*95(\.45)? %", t), where
+        for rel, p in re.findall(r"\bp ([≈=]) ([\d.]+) %", t):
+            seen += 1
+            assert rel == ("=" if p in ("95", "95.45") else "≈"), (where, rel, p)
+    assert seen
+
+
+def test_scale_factor_unit_text_is_one_per_page_kind(issued):
+    """The scale factor's unit: one printed text (gonio.result.statement.unit_text_in) on the
+    certificate in each language and on the web page, its D-SI form in the DCC; the data
+    files (results.json, items.csv, summary.txt) keep the unit key."""
+    from gonio.records.results import conformity_of
+    from gonio.result.statement import DSI_UNITS, unit_text_in
+
+    res = issued["res"]
+    for key, it in res["items"].items():
+        if not it["measured"] or it["unit"] != "counts/deg":
+            continue
+        for lang in ("en", "zh"):
+            html = issued["out"][lang]["html"]
+            row = next(r for r in re.findall(r"<tr>(.*?)</tr>", html, re.S)
+                       if f'data-src="items.{key}.value"' in r)
+            assert _cells(row)[-1] == unit_text_in("counts/deg", lang), (lang, _cells(row))
+            text = _page_text(html)
+            for other in ("counts/deg", "1/°", "counts/°" if lang == "zh" else "脉冲数/(°)"):
+                assert other not in text, (lang, other)
+            reals = _dcc_reals(issued["out"][lang]["dcc"])
+            assert reals[(key, "value")].find("si:unit", NS).text == DSI_UNITS[it["unit"]][0]
+        # the web page's conformity table of a decision on K
+        doc = {"items": {key: {**it, "conformity": {
+            "item": key, "U": 0.02, "lower": it["value"] - 1, "upper": it["value"] + 1,
+            "rule": "simple", "guard_band": 0.0, "acceptance_lower": it["value"] - 1,
+            "acceptance_upper": it["value"] + 1, "outcome": "pass", "accepted": True,
+            "conformance_probability": 0.99, "false_accept_probability": 0.01}}}}
+        row = conformity_of(doc)["rows"][0]
+        assert row["limits"].endswith(" " + unit_text_in("counts/deg", "en")), row
+        assert issued["rows"][key]["unit"] == it["unit"] == "counts/deg"
