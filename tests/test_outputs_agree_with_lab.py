@@ -497,7 +497,7 @@ def test_conformity_dash_note_only_where_a_dash_is_printed(issued):
             continue
         assert dashed, (lang, "a note explains a '—' no row prints", m.group(0)[:200])
         for name in rows:
-            if name in m.group(1):
+            if re.search(r"(^|, |、)" + re.escape(name) + r"(, |、|$)", m.group(1)):
                 assert name in dashed, (lang, name, rows[name])
 
 
@@ -518,7 +518,7 @@ def test_p_is_stated_one_way(issued):
     for where, t in texts.items():
         t = t.replace("\xa0", " ")
         assert not re.search(r"(approximately|约)\s*95(\.45)? %", t), where
-        for rel, p in re.findall(r"\bp ([≈=]) ([\d.]+) %", t):
+        for rel, p in re.findall(r"(?<![−-] )\bp ([≈=]) ([\d.]+) %", t):   # not "1 − p"
             seen += 1
             assert rel == ("=" if p in ("95", "95.45") else "≈"), (where, rel, p)
     assert seen
