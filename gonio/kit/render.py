@@ -22,14 +22,14 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :func:`parse_display`,
                                 :class:`Num`, :class:`NoBreakText`, :func:`num`,
                                 :func:`lookup`, :func:`item_nums`,
-                                :func:`conformity_texts`, :func:`no_probability_note`,
+                                :func:`conformity_texts`, :func:`no_probability_note`, :func:`condition_text`,
                                 :func:`interval_band_note`, :func:`declaration_parts`, :func:`interval_legend`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
                                 :func:`legend_above`, :func:`plain_axes`,
                                 :func:`empty_panel`, :func:`plain_log_ticks`,
                                 :data:`HTML_FIGSIZE`
 The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data`,
-                                :func:`measurement_result`, :func:`influence_conditions`,
+                                :func:`measurement_result`, :func:`influence_conditions`, :func:`environment_conditions`,
                                 :func:`element`, :func:`text_element`, :func:`quantity`,
                                 :func:`list_quantity`,
                                 :func:`not_measured_quantity`, :func:`tree_bytes`,
