@@ -18,6 +18,21 @@ SCHEMA_DIR = Path(os.environ.get("GONIO_DCC_SCHEMA_DIR",
 QUDT_URL = "https://www.ptb.de/si/v2.2.1/qudt/quantitykind.xsd"
 
 
+def pytest_xdist_auto_num_workers(config):
+    """pytest-xdist's ``-n auto``: the CPUs this process may run on (``os.sched_getaffinity``,
+    a container's or ``taskset``'s share), where pytest-xdist would ask psutil for physical
+    cores (1 on many 2-vCPU machines: no parallelism at all). ``$PYTEST_XDIST_AUTO_NUM_WORKERS``
+    still wins where set. The README's test command caps it with ``--maxprocesses 4``: each
+    worker starts its own PostgreSQL server, ``gonio serve`` processes and Chromium."""
+    env = os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        return int(env)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
 @pytest.fixture(scope="session")
 def dcc_schema():
     """The DCC 3.3.0 XSD loaded offline with xmlschema (XSD 1.1), remote access refused."""

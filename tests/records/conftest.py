@@ -65,12 +65,21 @@ def throwaway_postgresql():
     subprocess.run(_as_pg_user([str(bindir / "initdb"), "-D", str(data), "-U", "postgres",
                                 "--auth=trust", "-E", "UTF8", "--no-sync"]),
                    check=True, capture_output=True)
-    port = free_port()
     log = data / "server.log"
-    subprocess.run(_as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-l", str(log), "-w",
-                                "-o", f"-p {port} -k {data} -c listen_addresses=127.0.0.1 "
-                                      "-c fsync=off -c max_connections=200", "start"]),
-                   check=True, capture_output=True)
+    for attempt in range(5):
+        # a free port may be taken between free_port() and the server's bind (by another
+        # pytest-xdist worker's server or any client's ephemeral port): start on another
+        port = free_port()
+        started = subprocess.run(
+            _as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-l", str(log), "-w",
+                         "-o", f"-p {port} -k {data} -c listen_addresses=127.0.0.1 "
+                               "-c fsync=off -c max_connections=200", "start"]),
+            capture_output=True, text=True)
+        if started.returncode == 0:
+            break
+    else:
+        shutil.rmtree(root, ignore_errors=True)
+        raise RuntimeError(f"PostgreSQL did not start in 5 attempts: {started.stderr.strip()}")
     try:
         yield f"postgresql://postgres@127.0.0.1:{port}"
     finally:
@@ -179,20 +188,37 @@ class Server:
         import sys
         import urllib.request
 
-        port = free_port()
         url = ["--database", database] if database else []
-        proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
-                                 "--port", str(port), "--workers", str(workers), *url],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                start_new_session=True)
-        self.procs.append(proc)
+        for attempt in range(5):
+            # a free port may be taken before the server binds it (another pytest-xdist
+            # worker, any client's ephemeral port): a server that could not bind it is
+            # started again on another port; any other early end fails the test
+            port = free_port()
+            proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data",
+                                     str(data), "--port", str(port), "--workers", str(workers),
+                                     *url], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                    start_new_session=True)
+            self.procs.append(proc)
+            answer = self._wait(proc, port)
+            if answer is not None:
+                return proc, answer
+        raise AssertionError("gonio serve could not bind a free port in 5 attempts")
+
+    @staticmethod
+    def _wait(proc, port: int) -> str | None:
+        """The server's URL once it answers; None where it ended because its port was taken."""
+        import urllib.request
+
         end = time.monotonic() + 240
         while time.monotonic() < end:
             if proc.poll() is not None:
-                raise AssertionError(f"gonio serve ended: {proc.stderr.read().decode()}")
+                err = proc.stderr.read().decode()
+                if "address already in use" in err.lower() or "errno 98" in err.lower():
+                    return None
+                raise AssertionError(f"gonio serve ended: {err}")
             try:
                 urllib.request.urlopen(f"http://127.0.0.1:{port}/login", timeout=2)
-                return proc, f"http://127.0.0.1:{port}"
+                return f"http://127.0.0.1:{port}"
             except OSError:
                 time.sleep(0.5)
         raise AssertionError("gonio serve did not answer within 240 s")

@@ -54,12 +54,15 @@ def browser():
 
 
 class Shots:
-    """Full-page screenshots, numbered, into ``root`` (emptied first)."""
+    """Full-page screenshots, numbered, into ``root`` (its numbered screenshots of an earlier
+    run removed first; its sub-folders, another test's, kept: the month test writes into
+    ``SHOTS/month-*`` while this one, under pytest-xdist, may start on another worker)."""
 
     def __init__(self, root: Path = SHOTS):
         self.root = root
-        shutil.rmtree(root, ignore_errors=True)
-        root.mkdir(parents=True)
+        root.mkdir(parents=True, exist_ok=True)
+        for old in root.glob("[0-9][0-9]-*.png"):
+            old.unlink(missing_ok=True)
         self.n = 0
 
     def __call__(self, page, name: str) -> None:
