@@ -9,6 +9,7 @@ import re
 import shutil
 import stat
 import subprocess
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -26,6 +27,21 @@ def test_ci_run_holds_the_readme_test_command():
                     r"^bash scripts/install-test-system-deps\.sh && .*$"):
         cmd = re.search(pattern, readme, re.M).group(0).split("   #")[0].rstrip()
         assert cmd in ci, cmd
+
+
+def test_the_test_command_runs_on_capped_xdist_workers():
+    """The README's test command runs in parallel (pytest-xdist, in the test extras) with at
+    most four workers (each starts its own PostgreSQL server, gonio serve and Chromium), one
+    file per worker."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    cmd = re.search(r"^bash scripts/install-test-system-deps\.sh && .*$", readme, re.M).group(0)
+    pytest_args = cmd.split("python -m pytest", 1)[1].split("   #")[0].split()
+    assert pytest_args[pytest_args.index("-n") + 1] == "auto"
+    assert int(pytest_args[pytest_args.index("--maxprocesses") + 1]) == 4
+    assert pytest_args[pytest_args.index("--dist") + 1] == "loadfile"
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    assert any(r.startswith("pytest-xdist") for r in
+               extras["project"]["optional-dependencies"]["test"])
 
 
 def _stub(path: Path, body: str) -> None:
