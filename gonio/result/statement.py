@@ -309,14 +309,20 @@ def p_text(p: float | None) -> str | None:
     chosen, "95", "95.45", so that the certificate, summary.txt, results.json (0.9545) and
     the DCC (``si:coverageProbability`` 0.9545) state one p. A probability computed from a
     distribution (the coverage an interval of whole grid steps reaches: 0.99465…) is stated
-    to 2 significant digits; a probability below 1 is never shown as 100 (an interval's
-    stated probability is not certainty, JCGM 100 6.2.2): it takes the decimals that keep it
-    below 100, up to :data:`P_TEXT_MAX_DECIMALS`, and is rounded down at that many.
+    to 2 significant digits, **rounded down** at the digits printed: a computed coverage is
+    never overstated (0.98765 is "98", never "99"; 0.94567 "94", never "95"). A probability
+    below 1 is never shown as 100 (an interval's stated probability is not certainty,
+    JCGM 100 6.2.2): one within half a unit of the last digit below 100 takes the decimals
+    that show it below 100 (at most :data:`P_TEXT_MAX_DECIMALS`), rounded down at those.
+    The certificate, summary.txt and the DCC (``si:coverageProbability``, this text / 100)
+    print this one text.
 
     >>> p_text(0.95), p_text(0.9545), p_text(0.99), p_text(0.9973), p_text(None)
     ('95', '95.45', '99', '99.73', None)
-    >>> p_text(0.99465), p_text(0.981526), p_text(0.99671), p_text(0.99998), p_text(0.9999999)
-    ('99', '98', '99.7', '99.998', '99.999')
+    >>> p_text(0.99465), p_text(0.981526), p_text(0.98765), p_text(0.94567)
+    ('99', '98', '98', '94')
+    >>> p_text(0.99671), p_text(0.99998), p_text(0.9999999)
+    ('99.6', '99.998', '99.999')
     >>> p_text(1.0)
     '100'
     """
@@ -329,13 +335,9 @@ def p_text(p: float | None) -> str | None:
         return s.rstrip("0").rstrip(".") if "." in s else s
     v = 100.0 * float(p)
     d = max(decimals_for_sig(v, 2), 0)
-    s = round_half_up(v, d)
-    while v < 100.0 and float(s) >= 100.0:
-        d += 1
-        s = round_half_up(v, d) if d < P_TEXT_MAX_DECIMALS else \
-            round_half_up(v, P_TEXT_MAX_DECIMALS, rounding=ROUND_FLOOR)
-        if d >= P_TEXT_MAX_DECIMALS:
-            break
+    while v < 100.0 and d < P_TEXT_MAX_DECIMALS and float(round_half_up(v, d)) >= 100.0:
+        d += 1                      # the digits that show it below 100
+    s = round_half_up(v, d) if v >= 100.0 else round_half_up(v, d, rounding=ROUND_FLOOR)
     return s.rstrip("0").rstrip(".") if "." in s else s
 
 
