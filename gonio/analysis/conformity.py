@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal, localcontext
 
 from gonio.errors import GonioError
 from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interval,
@@ -260,21 +260,36 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         model = "normal"
     w = rule.guard_band(U)
     w_lo = w if U_lower is None else rule.guard_band(max(float(U_lower), 0.0))
-    a_lo, a_hi = acceptance_interval(limits, w, w_lo)
-    in_tol = _inside(y, limits.lower, limits.upper)
-    in_acc = _inside(y, a_lo, a_hi)
+    # compared exactly on the decimal numbers given (a printed value on a printed limit is
+    # on it, never 1e-11 beside it by the float arithmetic of T_U − w)
+    with localcontext() as ctx:
+        ctx.prec = 80
+        D = (lambda x: None if x is None else Decimal(repr(float(x))))  # noqa: E731
+        yD, wD = D(y), (D(0.0) if rule.kind == "simple" else
+                        D(rule.guard_factor) * D(U))
+        wloD = wD if U_lower is None else (D(0.0) if rule.kind == "simple" else
+                                           D(rule.guard_factor) * D(max(float(U_lower), 0.0)))
+        T_L, T_U = D(limits.lower), D(limits.upper)
+        a_loD = None if T_L is None else T_L + wloD
+        a_hiD = None if T_U is None else T_U - wD
+        in_tol = _inside(yD, T_L, T_U)
+        in_acc = _inside(yD, a_loD, a_hiD)
+        below = (T_L - yD) if T_L is not None else None
+        above = (yD - T_U) if T_U is not None else None
+    a_lo = None if a_loD is None else float(a_loD)
+    a_hi = None if a_hiD is None else float(a_hiD)
     if rule.kind == "non-binary":
         if in_acc:
             outcome = "pass"
         elif in_tol:
             outcome = "conditional pass"
         else:
-            below = (limits.lower - y) if limits.lower is not None else -math.inf
-            above = (y - limits.upper) if limits.upper is not None else -math.inf
+            below = below if below is not None else Decimal("-Infinity")
+            above = above if above is not None else Decimal("-Infinity")
             # outside the tolerance, "conditional" where the interval reaches back in: below
             # the lower limit by its reach above the value (w), above the upper limit by its
             # reach below it (w_lo)
-            outcome = ("conditional fail" if (below <= w if below >= above else above <= w_lo)
+            outcome = ("conditional fail" if (below <= wD if below >= above else above <= wloD)
                        else "fail")
     else:
         outcome = "pass" if in_acc else "fail"
@@ -400,10 +415,11 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
         chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None and no_p is None
                    and unc.nu_eff is not None and math.isfinite(unc.nu_eff)
                    and unc.nu_eff > 0 and it.value > 0 else None)
-        c = decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
+        y, U, dec, _ = stated_value_of(it)
+        c = decide(key, float(y), float(U), float(unc.k), bounds, rule,
                    chi2_nu=chi2_nu, no_probability=no_p)
         c = replace(c, **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds,
-                                           decimals_for_sig(float(unc.U), 2)))
+                                           dec))
     c = replace(c, limits_from=origin)
     lo, hi = c.acceptance_lower, c.acceptance_upper
     return replace(c, acceptance_empty=bool(
@@ -461,6 +477,41 @@ def stated_interval_of(it) -> tuple[Decimal, Decimal, Decimal, int, tuple[str, s
     ends = tuple("0" if x == 0 else t for x, t in zip((lo, hi), st.interval_ends))
     return value, lo, hi, int(st.decimals), (ends[0] if st.below_zero else st.value_text,
                                               ends[0], ends[1])
+
+
+def stated_value_of(it) -> tuple[Decimal, Decimal, int, str]:
+    """The value and U of an item stated y ± U, as its statement prints them
+    (:func:`gonio.result.statement.item_statement`, at its decimal place): (value, U, decimal
+    place, the value as printed). A non-negative quantity stated by its upper bound alone
+    ("≤ b", U above the value) is the interval [0, b]: the printed value, U = b − value
+    (the guard band reaches the printed bound); one whose estimate fell below zero: 0 and
+    U = b.
+
+    The decision is taken on these numbers, as :func:`stated_interval_of` does for an item
+    stated by its interval: the printed value against the limit as given, exactly, so a
+    printed value above a printed limit never passes (K = 76434.847 printed fails an upper
+    limit 76434.8468, whatever the unrounded 76434.84675).
+
+    >>> from gonio.result.model import Item, Uncertainty
+    >>> it = Item("K", "K", "7.1", "counts/deg", 76434.84675,
+    ...           uncertainty=Uncertainty([], 0.005, 0.0105, 2.1, 40.0, None, 0.95))
+    >>> v, U, dec, txt = stated_value_of(it)
+    >>> str(v), str(U), dec, txt
+    ('76434.847', '0.011', 3, '76434.847')
+    """
+    st = item_statement(it)
+    scale = Decimal(1).scaleb(st.exponent)
+    num = (lambda t: Decimal(t.replace("−", "-")) * scale)  # noqa: E731
+    dec = int(st.decimals) if st.decimals is not None else \
+        decimals_for_sig(float(it.uncertainty.U), 2)
+    if st.below_zero:
+        hi = num(st.interval[1])
+        return Decimal(0), hi, dec, "0"
+    value = num(st.value)
+    if st.U is not None:
+        return value, num(st.U), dec, st.value_text
+    hi = num(st.upper)
+    return value, max(hi - value, Decimal(0)), dec, st.value_text
 
 
 def interval_guard_U(lo: Decimal, hi: Decimal) -> Decimal:
