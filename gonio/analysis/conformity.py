@@ -389,10 +389,16 @@ def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
 #: ``probability_model`` of an item whose U has a coverage factor from a non-normal combined
 #: distribution (JCGM 101 convolution, :func:`decide_items`): N(y, U/k) is not the
 #: distribution whose 95 % half-width is U, so no probability is given; the outcome is
-#: decided on y against the acceptance interval.
+#: decided on y against the acceptance interval: under a guard band (guarded, non-binary) y
+#: within the tolerance narrowed by r·U, "decided on y ± U"; under simple acceptance (w = 0)
+#: y alone within the tolerance (:data:`NON_NORMAL_K_DECIDED`, by rule).
 NON_NORMAL_K_PROBABILITY_MODEL = ("not given: its k = {k} is the 95 % coverage factor of a "
                                   "non-normal combined distribution ({source}), not of "
-                                  "N(y, U/k); the outcome is decided on y ± U")
+                                  "N(y, U/k); the outcome is decided on {decided}")
+#: What the outcome of :data:`NON_NORMAL_K_PROBABILITY_MODEL` is decided on, by rule kind.
+NON_NORMAL_K_DECIDED: dict[str, str] = {
+    "simple": "y alone (simple acceptance, no guard band)",
+    "guarded": "y ± U", "non-binary": "y ± U"}
 
 #: ``k_source`` of a k that is the 95 % coverage factor of a non-normal combined distribution
 #: (the optical draft's JCGM 101 convolution of its budget, ``K_SOURCE_COMBINED`` there): the
@@ -409,8 +415,9 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
     else:
         no_p = None
         if unc.k_source in NON_NORMAL_K_SOURCES:
-            no_p = NON_NORMAL_K_PROBABILITY_MODEL.format(k=f"{float(unc.k):.3g}",
-                                                         source=unc.k_source)
+            no_p = NON_NORMAL_K_PROBABILITY_MODEL.format(
+                k=f"{float(unc.k):.3g}", source=unc.k_source,
+                decided=NON_NORMAL_K_DECIDED.get(rule.kind, "y ± U"))
         # ν as stated (integer part, stated_nu): the ν of the χ² interval beside the value
         chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None and no_p is None
                    and unc.nu_eff is not None and math.isfinite(unc.nu_eff)

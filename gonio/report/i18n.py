@@ -688,6 +688,11 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      r"distribution \((.+)\), not of N\(y, U/k\); the outcome is decided on y ± U\)",
      "—（不给出：其 k = {1} 为非正态合成分布（{2}）的 95 % 包含因子，不是 N(y, U/k) 的；"
      "判定依据 y ± U 作出）"),
+    (r"— \(not given: its k = (\S+) is the 95 % coverage factor of a non-normal combined "
+     r"distribution \((.+)\), not of N\(y, U/k\); the outcome is decided on y alone \(simple "
+     r"acceptance, no guard band\)\)",
+     "—（不给出：其 k = {1} 为非正态合成分布（{2}）的 95 % 包含因子，不是 N(y, U/k) 的；"
+     "判定仅依据 y 作出（简单接受，无保护带））"),
     # the bound an accepted interval item states where no probability is computed, with
     # the reason (report.stated.declaration_parts)
     (r"(≤ \S+ %) \((not given: .+)\)", "{1}（{2}）"),
