@@ -142,7 +142,9 @@ def test_k_through_gonio_calibrate_with_a_simple_rule(tmp_path, capsys):
     y, U = k["value"], k["uncertainty"]["U"]
     yp, Up = printed(y, U)
     assert yp != Decimal(repr(y))
-    mid = (Decimal(repr(y)) + yp) / 2             # between the unrounded and the printed K
+    # between the unrounded and the printed K (as the laboratory file's float reads it)
+    mid = Decimal(repr(float((Decimal(repr(y)) + yp) / 2)))
+    assert min(Decimal(repr(y)), yp) < mid < max(Decimal(repr(y)), yp)
     side = "upper" if yp > Decimal(repr(y)) else "lower"
     other = ("lower", yp - 1) if side == "upper" else ("upper", yp + 1)
     lab = (ROOT / "protocols" / "lab-example.toml").read_text()
