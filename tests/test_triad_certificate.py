@@ -14,7 +14,7 @@ import math
 import html
 import json
 import re
-from decimal import ROUND_HALF_UP, Decimal
+from decimal import ROUND_CEILING, ROUND_FLOOR, ROUND_HALF_UP, Decimal
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +56,7 @@ def run(tmp_path_factory):
     assert main(["simulate", "--spec", "triad-alignment", "--bench", "mems-triad",
                  "--out", str(d / "sim")]) == 0
     assert main(["calibrate", str(d / "sim" / "readings.csv"), "--out", str(d / "cal"),
-                 "--monte-carlo", "300"]) == 0
+                 "--monte-carlo", "300", "--dcc"]) == 0
     return {"dir": d, "res": json.loads((d / "cal" / "results.json").read_text()),
             "html": (d / "cal" / "certificate.html").read_text(encoding="utf-8"),
             "truth": json.loads((d / "sim" / "truth.json").read_text())}
@@ -71,19 +71,31 @@ def test_results_json_per_item_shape(run):
         it = res["items"][key]
         assert keys <= set(it), key
         assert it["measured"], (key, it["reason"])
-    u = res["items"]["M_xy"]["uncertainty"]
+    it = res["items"]["M_xy"]
+    u = it["uncertainty"]
     assert {"components", "u_c", "U", "k", "nu_eff"} <= set(u)
-    assert u["monte_carlo"]["trials"] == 300
-    # k is Student's t for 95.45 % at the stated ν_eff (the fit's ν and the table's Type B
-    # line, ν = ∞, by Welch–Satterthwaite; its integer part, ∞ above NU_INFINITE)
+    # one statement: the bound-condition interval; the Monte Carlo u and the JCGM 100 U are
+    # in the details, not certified
+    assert u["k"] is None and "monte_carlo" not in u
+    nc = it["details"]["not_certified"]
+    assert nc["monte_carlo"]["trials"] == 300 and nc["monte_carlo"]["status"] == "not certified"
+    # the JCGM 100 reading's k is Student's t for 95.45 % at its ν_eff (the fit's ν and the
+    # table's Type B line, ν = ∞, by Welch–Satterthwaite; its integer part, ∞ above NU_INFINITE)
     from scipy import stats
     from gonio.result.statement import NU_INFINITE
     fit, table = u["components"]
     assert table["symbol"] == "M_xy_table" and table["type"] == "B" and fit["type"] == "A"
-    nu = u["nu_eff"] if u["nu_eff"] is not None else math.inf
+    gum = nc["gum"]
+    nu = gum["nu_eff"] if gum["nu_eff"] is not None else math.inf
     assert nu == pytest.approx(u["u_c"] ** 4 / (fit["u"] ** 4 / fit["dof"]), rel=1e-9)
     nu_s = math.floor(nu) if nu <= NU_INFINITE else math.inf
-    assert u["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, nu_s), rel=1e-9)
+    assert gum["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, nu_s), rel=1e-9)
+    # the certified U: the table's worst-case offset plus t(ν_fit)·u_fit (u_fit the fit's line)
+    bc = it["details"]["bound_condition"]
+    assert bc["u_rest"] == pytest.approx(fit["u"], rel=1e-12)
+    assert u["U"] == pytest.approx(bc["a_table"] + stats.t.ppf(0.5 + 0.9545 / 2, math.floor(
+        fit["dof"] + 1e-9)) * fit["u"], rel=1e-9)
+    assert u["interval"] == pytest.approx([it["value"] - u["U"], it["value"] + u["U"]])
     # the thermal programme (named by the readings' metadata) gives the model's items
     assert res["items"]["K_z_t1_v1"]["measured"] and res["items"]["b_z_t1_v1"]["measured"]
     assert res["extra"]["thermal_model"]["channels"]["z"]["scale"]["criterion"] == "bic"
@@ -113,12 +125,23 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
             U_txt, dec = two_sig(it["uncertainty"]["U"])
             assert spans[f"items.{key}.uncertainty.U"] == U_txt
             assert spans[f"items.{key}.value"] == half_up(it["value"], dec)
-    for key in ("K_z_t1_v1", "K_z_t8_v3", "b_z_t5_v2", "ARW_z_t3"):   # the certified points
+    for key in ("b_z_t5_v2", "ARW_z_t3"):   # the certified points, value ± U (k)
         it = res["items"][key]
         U_txt, dec = two_sig(it["uncertainty"]["U"])
         assert spans[f"items.{key}.uncertainty.U"] == U_txt, key
         assert spans[f"items.{key}.value"] == half_up(it["value"], dec), key
         assert f"items.{key}.uncertainty.k" in spans, key
+    for key in ("K_z_t1_v1", "K_z_t8_v3"):  # K: the bound-condition interval, k of the rest
+        it = res["items"][key]
+        U_txt, dec = two_sig(it["uncertainty"]["U"])
+        lo, hi = it["uncertainty"]["interval"]
+        q = Decimal(1).scaleb(-dec)
+        ends = (str(Decimal(repr(lo)).quantize(q, rounding=ROUND_FLOOR)),
+                str(Decimal(repr(hi)).quantize(q, rounding=ROUND_CEILING)))
+        assert spans[f"items.{key}.value"] == half_up(it["value"], dec), key
+        assert f"{spans[f'items.{key}.value']}</span> [{ends[0]}, {ends[1]}]" in page, key
+        assert f"items.{key}.details.bound_condition.k_rest" in spans, key
+        assert f"items.{key}.uncertainty.k" not in spans, key
     for src, rule, text in SPANS.findall(page):        # every span points at results.json
         assert lookup(res, src) is not None, src
     assert 'id="alignment-matrix"' in page and 'id="cross-axis"' in page
@@ -360,8 +383,13 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
         assert f"items.b_{a}.uncertainty.k" in srcs          # b's own k in its cell
         k_b = dict(spans)[f"items.b_{a}.uncertainty.k"]
         assert float(k_b) == pytest.approx(res["items"][f"b_{a}"]["uncertainty"]["k"], rel=5e-3)
-    for p in ("xy", "xz", "yx", "yz", "zx", "zy"):
-        assert f"items.S_{p}.uncertainty.k" in srcs and f"items.L_{p}.uncertainty.k" in srcs
+    for a in AX:                                # M's rows: the bound statement's own k
+        for b in AX:
+            assert f"items.M_{a}{b}.details.bound_condition.k_rest" in srcs
+            assert f"items.M_{a}{b}.uncertainty.k" not in srcs
+    for p in ("xy", "xz", "yx", "yz", "zx", "zy"):  # S and L: the interval, no k of the whole
+        assert f"items.S_{p}.uncertainty.k" not in srcs
+        assert f"items.L_{p}.uncertainty.k" not in srcs
     ps = {it["uncertainty"]["coverage_probability"] for it in res["items"].values()
           if it.get("uncertainty") and it["uncertainty"].get("U") is not None}
     assert ps == {0.9545}, ps                       # the p the k were computed for
@@ -383,12 +411,13 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
 
 def test_bias_monte_carlo_is_of_the_same_long_term_quantity_as_the_gum(run):
     """b's GUM u is long-term (the fit plus the bias instability over a day); its Monte Carlo
-    column refits this record only. The certified Monte Carlo u is the refits' u with the
-    same bias-instability term in quadrature, so the two columns state the same quantity:
-    the refits agree with the fit's own line, and the totals agree with each other."""
+    refits this record only. The Monte Carlo u kept (not certified) in the details is the
+    refits' u with the same bias-instability term in quadrature, so it is of the same
+    quantity: the refits agree with the fit's own line, and the totals agree."""
     for a in AX:
         unc = run["res"]["items"][f"b_{a}"]["uncertainty"]
-        mc = unc["monte_carlo"]
+        mc = run["res"]["items"][f"b_{a}"]["details"]["not_certified"]["monte_carlo"]
+        assert "monte_carlo" not in unc and mc["status"] == "not certified"
         comp = {c["symbol"]: c["u"] for c in unc["components"]}
         assert mc["u_long_term"] == pytest.approx(comp[f"b_{a}_BI"], rel=1e-12)
         assert mc["u_long_term"] > 2 * mc["u_fit"]            # the term the refits lack
@@ -396,3 +425,50 @@ def test_bias_monte_carlo_is_of_the_same_long_term_quantity_as_the_gum(run):
         assert 0.75 < mc["u_fit"] / fit_gum < 1.33              # 300 refits vs the fit's u
         assert 0.9 < mc["u"] / unc["u_c"] < 1.1
         assert mc["u"] == pytest.approx(np.hypot(mc["u_fit"], mc["u_long_term"]), rel=1e-12)
+
+
+def test_one_statement_per_item_everywhere(run):
+    """Every item has one statement: M, S, L and K(ϑ, U) the bound-condition interval, the
+    others value ± U with their k. The certificate has no second column (no "U (bound)",
+    no Monte Carlo, no GUM U beside the certified one); summary.txt, items.csv and the DCC
+    state the same interval ends; results.json keeps the other readings in the details as
+    "not certified"."""
+    import csv
+
+    res, page = run["res"], run["html"]
+    text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
+    for gone in ("U (bound)", "Two statements", "u (Monte Carlo)", "U Monte Carlo", "u (GUM)",
+                 "This certificate certifies"):
+        assert gone not in text, gone
+    assert "One statement per item" in text
+    cal = run["dir"] / "cal"
+    summary = (cal / "summary.txt").read_text(encoding="utf-8")
+    dcc = (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    rows = {r["item"]: r for r in csv.DictReader((cal / "tables" / "items.csv").open(
+        encoding="utf-8"))}
+    bound_keys = [k for k in res["items"] if k[:2] in ("M_", "S_", "L_") or k.startswith("K_")]
+    assert len(bound_keys) == 9 + 6 + 6 + 24
+    # summary.txt lists the items in results.json's order; the interval lines are these
+    stated = re.findall(r"interval \[([^,]+), ([^\]]+)\]", summary)
+    assert len(stated) == len(bound_keys)
+    for key, (s_lo, s_hi) in zip(bound_keys, stated):
+        it = res["items"][key]
+        u = it["uncertainty"]
+        assert u["k"] is None and "gum" not in it["details"], key
+        assert it["details"]["not_certified"]["gum"]["status"] == "not certified", key
+        lo, hi = u["interval"]
+        block = dcc[dcc.index(f'id="result-{key}"'):]
+        block = block[:block.index("</dcc:result>")]
+        assert "expandedMU" not in block and "coverageFactor" not in block, key
+        d_lo = re.search(r"<si:intervalMin>([^<]+)<", block)[1]
+        d_hi = re.search(r"<si:intervalMax>([^<]+)<", block)[1]
+        assert (float(s_lo.replace("−", "-")), float(s_hi.replace("−", "-"))) == (
+            float(d_lo), float(d_hi)), key
+        step = 10.0 ** math.floor(math.log10(abs(hi - lo)) - 2)
+        assert float(d_lo) <= lo + 1e-12 and float(d_lo) > lo - 10 * step, key
+        assert float(d_hi) >= hi - 1e-12 and float(d_hi) < hi + 10 * step, key
+        assert rows[key]["U"] == "" and rows[key]["k"] == "", key
+        assert float(rows[key]["interval_low"]) == pytest.approx(lo, rel=1e-12)
+    for key in ("b_x", "b_z_t1_v1", "ARW_z_t1"):
+        u = res["items"][key]["uncertainty"]
+        assert u["k"] is not None and u.get("interval") is None, key

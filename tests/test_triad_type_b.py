@@ -114,24 +114,26 @@ def _noisy_text(seed: int = 4) -> str:
 
 
 def test_report_page_shows_the_certified_items_U():
-    """``gonio align --report``'s page: every M_ij, S_ij and L_ij is printed with the U of
-    the certified item (the fit and the table's Type B line, k = t(ν_eff)), not the fit's
-    k times the total u; the fit-only k gives a different U for M_xx (the table dominates,
-    ν_eff ≫ ν of the fit), so the check can fail."""
-    from gonio.specs.triad_alignment.pages import alignment_page, value_with_u
+    """``gonio align --report``'s page: every M_ij, S_ij and L_ij is printed as its certified
+    statement, the bound-condition interval value [value − U, value + U] of the item, not
+    the JCGM 100 U (kept in the details, not certified: smaller, so the check can fail) nor
+    the fit's k times the total u."""
+    from gonio.specs.triad_alignment.pages import (alignment_page, certified_cell,
+                                                   value_with_u)
 
     cal = calibrate(parse_triad_readings(_noisy_text(), "r.csv"))
     al, items = cal.alignment, cal.items
     page = alignment_page(al)
     for key in [f"M_{a}{c}" for a in "xyz" for c in "xyz"]:
-        assert value_with_u(items[key].value, items[key].uncertainty.U) in page, key
+        it = items[key]
+        assert it.uncertainty.k is None and certified_cell(it) in page, key
+        gum = it.details["not_certified"]["gum"]
+        assert gum["U"] < it.uncertainty.U
+        assert value_with_u(it.value, gum["U"]) not in page, key
     for key in [k for k in items if k[:2] in ("S_", "L_")]:
-        u_txt = value_with_u(items[key].value * 1e3, items[key].uncertainty.U * 1e3)
-        assert (u_txt if key.startswith("S_") else u_txt.split(" ± ")[1]) in page, key
+        assert certified_cell(items[key], 1e3) in page, key
     k_fit = al.coverage_factor[0]
-    u_xx = items["M_xx"].uncertainty
-    assert abs(u_xx.k - k_fit) > 0.05
-    assert value_with_u(items["M_xx"].value, k_fit * u_xx.u_c) not in page
+    assert value_with_u(items["M_xx"].value, k_fit * items["M_xx"].uncertainty.u_c) not in page
 
 
 def test_align_command_includes_the_table_term(tmp_path, capsys):

@@ -17,15 +17,19 @@ reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.result.model
 
 Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: white dwell noise plus a bias
 offset per orientation block, σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ,
-:func:`gonio.specs.triad_alignment.analysis.variance_components`; k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
-is given beside it. A readings file without alignment (or thermal) rows, or one whose dwells
+:func:`gonio.specs.triad_alignment.analysis.variance_components`; k = t_0.9545(ν)); the
+items the rate table enters (M, S, L, K) are stated by the bound-condition interval
+(:func:`bound_condition`, :func:`certified`), one statement per item. With Monte Carlo
+trials (JCGM 101 7) the Monte Carlo standard uncertainty, and the JCGM 100 U of the
+table-dominated items, are kept in the item's details as not certified (:func:`not_certified`).
+A readings file without alignment (or thermal) rows, or one whose dwells
 do not determine M and b, gives those items not measured with the reason.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -64,8 +68,11 @@ READINGS_TAKEN = (
     "axis and the static positions), the Earth rate of every orientation averaged over the "
     "swept table angle; for one ± pair it reduces to the article's difference formula.",
     "Uncertainties: Type A from the fit residuals, k = t(ν), coverage probability "
-    "p = " + p_text(COVERAGE) + " %; the Monte Carlo "
-    "(JCGM 101) standard uncertainty is given beside it when trials were run.",
+    "p = " + p_text(COVERAGE) + " %; the items the rate table enters (M, S, L, K) are stated "
+    "by the bound-condition interval, value ± (a + k·u): the table's errors at their bounds "
+    "in their worst combination, a, plus k·u of the other lines; one statement per item. "
+    "The JCGM 100 U of those items and the Monte Carlo (JCGM 101) u, when trials were run, "
+    "are in results.json's details, not certified.",
     "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
     "uncertainty is what the alignment leaves.",
     "Averaging time: the shortest octave τ at which every gyro's Allan deviation of the "
@@ -158,8 +165,11 @@ def with_table_type_b(unc: Uncertainty, key: str, u_b: float, al: AlignmentResul
     return Uncertainty(comp, u_c, k * u_c, k, float(nu), unc.monte_carlo, COVERAGE, K_SOURCE_WS)
 
 
-#: The two statements of a table-dominated item (M_ij, S_ij, L_ij, the thermal K values)
-#: and which the certificate certifies (the protocol's ``[alignment] uncertainty_statement``).
+#: The two readings of a table-dominated item's uncertainty (M_ij, S_ij, L_ij, the thermal K
+#: values). The certificate states one: "bound", the statement that covers at every table
+#: error the procedure allows (docs/alignment.md, the coverage study's ``worst`` cases, where
+#: the JCGM 100 U covered 40–65 %). The JCGM 100 U stays in results.json's details under
+#: ``not_certified`` (:data:`NOT_CERTIFIED`), labelled so.
 STATEMENTS = {
     "gum": "JCGM 100: the table's errors as distributions (rate error normal with its "
            "certificate's u, axis components rectangular u = a/√3) in u_c, U = k·u_c; holds "
@@ -170,6 +180,36 @@ STATEMENTS = {
              "plus k·u of the other lines, U = a + t_0.9545(ν)·u_rest; holds at least 95.45 % "
              "at every table error within its bounds",
 }
+
+
+#: The label of every reading results.json keeps beside the certified statement.
+NOT_CERTIFIED = "not certified"
+
+
+def not_certified(unc: Uncertainty, gum: Uncertainty | None = None
+                  ) -> tuple[Uncertainty, dict]:
+    """The certified uncertainty ``unc`` without its Monte Carlo standard uncertainty, and
+    the readings that are not the certified statement, labelled :data:`NOT_CERTIFIED`, for
+    the item's details: the Monte Carlo u (JCGM 101; it redraws the fit's noise, not the
+    table) and, for an item the rate table enters, the JCGM 100 U (``gum``). One statement per
+    item reaches the certificate, summary, items.csv, the DCC and the web page; these stay
+    in results.json only.
+
+    >>> u = Uncertainty([], 1.0, 2.0, 2.0, math.inf, {"trials": 10, "u": 1.1}, COVERAGE, "t")
+    >>> c, d = not_certified(u)
+    >>> c.monte_carlo is None, d["monte_carlo"]["u"], d["monte_carlo"]["status"]
+    (True, 1.1, 'not certified')
+    """
+    out: dict = {}
+    if unc.monte_carlo:
+        out["monte_carlo"] = {**unc.monte_carlo, "status": NOT_CERTIFIED,
+                              "basis": "JCGM 101 Monte Carlo of the fit's noise (the rate "
+                                       "table's errors not redrawn): information beside the "
+                                       "certified statement"}
+    if gum is not None:
+        out["gum"] = {"U": gum.U, "k": gum.k, "u_c": gum.u_c, "nu_eff": gum.nu_eff,
+                      "status": NOT_CERTIFIED, "basis": STATEMENTS["gum"]}
+    return replace(unc, monte_carlo=None), out
 
 
 def bound_condition(value: float, a_table: float, u_rest: float, nu_rest: float) -> dict:
@@ -196,11 +236,13 @@ def bound_condition(value: float, a_table: float, u_rest: float, nu_rest: float)
             "coverage_probability": COVERAGE, "basis": STATEMENTS["bound"]}
 
 
-def certified(unc: Uncertainty, bc: dict, statement: str) -> Uncertainty:
-    """The uncertainty the certificate states: the GUM budget ``unc`` ("gum"), or ("bound")
-    the same budget stated by the bound-condition interval ``bc`` (:func:`bound_condition`):
-    no coverage factor (U_bound is no multiple of u_c), the interval is the statement with
-    probability at least 0.9545 at every table error within its bounds."""
+def certified(unc: Uncertainty, bc: dict, statement: str = "bound") -> Uncertainty:
+    """The uncertainty the certificate states: the GUM budget ``unc`` stated by the
+    bound-condition interval ``bc`` (:func:`bound_condition`): no coverage factor (U_bound is
+    no multiple of u_c; u_c stays the budget's combined standard uncertainty), the interval
+    is the statement with probability at least 0.9545 at every table error within its
+    bounds. ``statement`` "gum" (the JCGM 100 U itself) is for studies only: the protocol
+    refuses it (:data:`gonio.specs.triad_alignment.bench._BOUND_ONLY_TXT`)."""
     if statement != "bound":
         return unc
     return Uncertainty(list(unc.components), unc.u_c, bc["U"], None, bc["nu_rest"],
@@ -208,7 +250,9 @@ def certified(unc: Uncertainty, bc: dict, statement: str) -> Uncertainty:
                        f"bound condition: U = a_table + k·u_rest = {bc['a_table']:.4g} + "
                        f"{bc['k_rest']:.3g} × {bc['u_rest']:.4g} (the table's errors at their "
                        "bounds, worst combination; at least 95.45 % at every table error "
-                       "within them)", tuple(bc["interval"]))
+                       "within them)", tuple(bc["interval"]),
+                       u_c_of="the JCGM 100 budget (the table's errors as distributions); "
+                              "the bound-condition interval is the statement")
 
 
 def nu_with_table(u_fit: float, nu_fit: float, u_b: float) -> float:
@@ -293,11 +337,12 @@ def static_record_s(r: TriadReadings) -> float:
 
 
 def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
-                    statement: str = "gum") -> dict[str, Item]:
+                    statement: str = "bound") -> dict[str, Item]:
     """The alignment items (module docstring) from an :class:`AlignmentResult`. The items the
-    rate table enters (M, S, L) carry both statements in their details (``gum`` and
-    ``bound_condition``, :data:`STATEMENTS`); ``statement`` says which one the item's
-    uncertainty states (:func:`certified`)."""
+    rate table enters (M, S, L) state the bound-condition interval (:func:`certified`; its
+    parts in ``details.bound_condition``); every item's other readings (the JCGM 100 U, the
+    Monte Carlo u) are in ``details.not_certified`` (:func:`not_certified`), labelled so.
+    ``statement`` "gum" is for studies only (the protocol refuses it)."""
     unit = al.output_unit or "output"
     items: dict[str, Item] = {}
     um = al.u_system_matrix
@@ -317,11 +362,10 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
     def both(key, clause, name, unit_, value, fit_unc, u_b, a, details=None):
         gum = with_table_type_b(fit_unc, key, u_b, al)
         bc = bound_condition(value, a, fit_unc.u_c, fit_unc.nu_eff)
-        return Item(key, name, clause, unit_, value, uncertainty=certified(gum, bc, statement),
+        unc, other = not_certified(certified(gum, bc, statement), gum)
+        return Item(key, name, clause, unit_, value, uncertainty=unc,
                     details={**(details or {}), "statement": statement,
-                             "gum": {"U": gum.U, "k": gum.k, "u_c": gum.u_c,
-                                     "nu_eff": gum.nu_eff},
-                             "bound_condition": bc})
+                             "bound_condition": bc, "not_certified": other})
     for i in range(3):
         for j in range(3):
             key = f"M_{AXES[i]}{AXES[j]}"
@@ -338,9 +382,11 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
         u_long = float(u_bi[i] * abs(al.system_matrix[i, i]))
         if u_long > 0:
             unc = _with_bias_instability(unc, key, u_long, float(nu_bi[i]))
+        unc, other = not_certified(unc)
         items[key] = Item(key, f"bias {key}", "§4 eq. 28–30a", unit, float(al.bias_output[i]),
                           uncertainty=unc,
-                          details={"bias_dps": float(al.derived["bias_dps"][i]),
+                          details={**({"not_certified": other} if other else {}),
+                                   "bias_dps": float(al.derived["bias_dps"][i]),
                                    "u_bias_dps": float(al.u_derived["bias_dps"][i]),
                                    "u_bias_in_run_dps": float(al.u_derived["bias_dps"][i]),
                                    "u_bias_instability_dps": float(u_bi[i]),
@@ -388,6 +434,24 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
                     "test_rate_dps": av.test_rate_dps, "tau_needed_s": av.tau_needed_s,
                     "shortest_dwell_s": av.shortest_dwell_s, "sufficient": av.sufficient})
     return items
+
+
+def inverse_bound(al: AlignmentResult) -> list[dict]:
+    """The certificate's statement of the alignment matrix M⁻¹ (derived, not an item), row by
+    row, as M's: the bound-condition interval (:func:`bound_condition`) with a the first-order
+    offset of M⁻¹ at the table's bounds (``type_b.a_derived.alignment_matrix``) and the fit's
+    part of its u with the smallest ν of the fit; without a table budget, the fit's U
+    (a = 0). One statement per cell, decided here, not in the renderer."""
+    minv = np.ravel(al.derived["alignment_matrix"])
+    u_tot = np.ravel(al.u_derived["alignment_matrix"])
+    tb = al.type_b or {}
+    u_b = np.ravel(tb["u_derived"]["alignment_matrix"]) if tb else np.zeros(9)
+    a = np.ravel(tb["a_derived"]["alignment_matrix"]) if tb else np.zeros(9)
+    nu = float(np.min(al.dof))
+    return [{"value": float(minv[n]),
+             **bound_condition(float(minv[n]), float(a[n]),
+                               _fit_part(float(u_tot[n]), float(u_b[n])), nu)}
+            for n in range(9)]
 
 
 def item_keys() -> tuple[str, ...]:
@@ -563,7 +627,7 @@ def _rest_of(unc: Uncertainty, drop: str) -> tuple[float, float]:
 
 
 def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None,
-                  rate_u_rel: float = 0.0, statement: str = "gum") -> dict[str, Item]:
+                  rate_u_rel: float = 0.0, statement: str = "bound") -> dict[str, Item]:
     """The certified values of the identified K(ϑ, U), b(ϑ, U), ARW(ϑ) at the programme's
     set points and supply levels (:meth:`ChannelModel.certified_points`), in physical units:
     a fixed measurand per item, whatever orders the criterion chose (the coefficients are
@@ -595,9 +659,8 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
                 u_rest, nu_rest = _rest_of(unc, f"{key}_table")
                 bc = bound_condition(pt["value"], abs(pt["value"]) * RATE_ERROR_BOUND_K
                                      * rate_u_rel, u_rest, nu_rest)
-                both = {"statement": statement, "bound_condition": bc,
-                        "gum": {"U": unc.U, "k": unc.k, "u_c": unc.u_c, "nu_eff": unc.nu_eff}}
-                unc = certified(unc, bc, statement)
+                unc, other = not_certified(certified(unc, bc, statement), unc)
+                both = {"statement": statement, "bound_condition": bc, "not_certified": other}
             items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
                               units[name], pt["value"], uncertainty=unc,
                               details={**both, "setpoint_c": pt["setpoint_c"],
@@ -680,8 +743,9 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     ``monte_carlo_trials`` draws; the extended model from the thermal programme
     (:func:`_thermal_readings`; :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`),
     applied back to the same record for the before/after comparison. ``protocol`` (a name or
-    file; None: the JCGM 100 statement) gives the statement the table-dominated items
-    certify (``[alignment] uncertainty_statement``, :data:`STATEMENTS`); everything else
+    file; None: the built-in one's) gives the statement the table-dominated items
+    certify (``[alignment] uncertainty_statement``: "bound", the only one it accepts,
+    :data:`STATEMENTS`); everything else
     the analysis uses is in the readings file.
     ``findings``: the screening of both files already made (:func:`screen_files`, the
     pipeline's ``SPEC.screen``); None: screened here.
@@ -692,7 +756,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
 
     # which statement the table-dominated items certify: the protocol's choice (STATEMENTS)
     statement = load_triad_protocol(protocol, KEY).uncertainty_statement if protocol \
-        else "gum"
+        else "bound"
     r = _as_readings(readings)
     screened = findings is not None
     # refused readings stop here, naming the line
@@ -747,6 +811,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             extra["thermal_model"] = tj
     if al is not None:
         extra["cross_axis"] = cross_axis_table(al).to_dict(orient="records")
+        extra["alignment_inverse"] = inverse_bound(al)
     extra["figures"] = figure_series(al, th)      # what the certificate's figures draw
     src = source_info(r)
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),

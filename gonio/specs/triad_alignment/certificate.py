@@ -37,14 +37,17 @@ TEXT = {
                      "速率：相对标准不确定度 {rate}；转轴：各方位 ±{bound}°"),
     "h_alignment": ("Alignment matrix", "对准矩阵"),
     "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
-                       "from {n} dwells{robust}; each cell value ± U (k = …), U = k·u for a "
-                       "coverage probability p = " + P_STATED + " %, k = t(ν) of the element's own budget "
-                       "(the fit and the rate table, ν by Welch–Satterthwaite; ν in the "
-                       "uncertainty table below).",
+                       "from {n} dwells{robust}; one statement per cell, coverage probability "
+                       "p = " + P_STATED + " %: M the bound-condition interval [value − U, value + U], "
+                       "U = a + k·u (the rate table's errors at their bounds, a, plus k·u of the "
+                       "fit; no coverage factor of the whole), b value ± U (k = …), U = k·u, k = "
+                       "t(ν) of b's own budget (ν by Welch–Satterthwaite); a, u, ν and k of every "
+                       "cell in the uncertainty table below.",
                        "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
-                       "由 {n} 个测量段{robust}求得；各格为 值 ± U（k = …），U = k·u，包含概率 p = "
-                       + P_STATED + " %，k 按各元素自身预算（拟合与转台，ν 按 Welch–Satterthwaite 公式）的"
-                       "自由度 ν 取 t 分布因子（ν 见下方不确定度表）。"),
+                       "由 {n} 个测量段{robust}求得；每格一个表述，包含概率 p = " + P_STATED + " %："
+                       "M 为界限条件区间 [值 − U, 值 + U]，U = a + k·u（转台误差取其界限的 a 加拟合的 "
+                       "k·u；整体无包含因子），b 为 值 ± U（k = …），U = k·u，k 按 b 自身预算"
+                       "（ν 按 Welch–Satterthwaite 公式）取 t 分布因子；各格的 a、u、ν 与 k 见下方不确定度表。"),
     "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
     "gyro": ("gyro", "陀螺"),
     "k_nu": ("k (ν)", "k（ν）"),
@@ -59,7 +62,6 @@ TEXT = {
                    "扩展不确定度（对准后残留的量）。单位 ‰。"),
     "pair": ("gyro ← rate about", "陀螺 ← 输入角速度轴"),
     "S_col": ("S before (‰) ± U", "对准前 S（‰）± U"),
-    "mc_col": ("U Monte Carlo (‰)", "U 蒙特卡洛（‰）"),
     "L_col": ("leakage after (‰) ± U", "对准后残余（‰）± U"),
     "averaging": ("Averaging time from the Allan deviation: τ = {tau} s (noise limit "
                   "ω sin ψ_T / 10 = {lim} °/s at ω = {w} °/s, ψ_T = {psi}°); shortest dwell "
@@ -75,40 +77,33 @@ TEXT = {
                  "bias, and a bias offset per orientation and static dwell, σ_B²: cov = "
                  "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ, ν by Welch–Satterthwaite; Type B, the rate "
                  "table: its rate error (relative u {rate}) and its spin axis at each "
-                 "orientation (each component within ±{bound}°), first order, ν = ∞. Monte "
-                 "Carlo (JCGM 101) standard uncertainty of the fit beside it{mc}: it redraws "
-                 "the noise, not the table.",
+                 "orientation (each component within ±{bound}°), first order. Monte Carlo "
+                 "(JCGM 101){mc}: in results.json only, not certified (it redraws the fit's "
+                 "noise, not the table).",
                  "A 类评定，由加权最小二乘残差求得（JCGM 100 4.2），驻留噪声分两部分：白噪声 σ_w²"
                  "（各方位相对其自身零偏的离散）与每个方位及每个静态驻留的零偏偏移 σ_B²：cov = "
                  "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ，ν 按 Welch–Satterthwaite 公式；B 类评定为速率转台："
                  "其速率误差（相对标准不确定度 {rate}）及各方位下转轴方向（各分量在 ±{bound}° 内），"
-                 "一阶传播，ν = ∞。旁列拟合的蒙特卡洛法（JCGM 101）标准不确定度{mc}：仅重抽噪声，"
-                 "不含转台。"),
+                 "一阶传播。蒙特卡洛法（JCGM 101）{mc}：仅载于 results.json，非校准结果（仅重抽拟合噪声，"
+                 "不含转台）。"),
     "mc_trials": (" ({n} trials)", "（{n} 次试验）"),
     "mc_none": (" (not run: --monte-carlo N)", "（未运行：--monte-carlo N）"),
-    "u_gum": ("u (GUM)", "u（GUM）"),
-    "U_bound": ("U (bound)", "U（界限条件）"),
-    "SL_bound": ("U (bound), S / L (‰)", "界限条件 U，S / L（‰）"),
+    "a_col": ("a (table at its bounds)", "a（转台误差取界限）"),
+    "u_col": ("u (fit; other lines)", "u（拟合及其他分量）"),
     "bound_tag": ("bound condition", "界限条件"),
-    "bound_note": ("Two statements of the items the rate table enters (M, S, L and K(ϑ, U)): U "
-                   "of JCGM 100 (the table's errors as distributions, u_c and k = t(ν_eff); it "
-                   "holds p = " + P_STATED + " % over their distribution) and the bound-condition U (the "
-                   "table's errors at their bounds — rate error at {rate_bound} relative, the "
-                   "certificate's expanded uncertainty, every axis component at ±{bound}° — in "
-                   "their worst combination, a, plus k·u of the fit: U = a + k·u; it holds with "
-                   "at least that probability at every table error within the bounds; column "
-                   "U (bound) here and in the cross-axis table, for K(ϑ, U) in results.json). This "
-                   "certificate certifies {which} (the protocol's uncertainty_statement).",
-                   "受速率转台影响的项（M、S、L 及 K(ϑ, U)）有两种表述：JCGM 100 的 U（转台误差按其"
-                   "分布处理，u_c 与 k = t(ν_eff)；在其分布上包含概率 p = " + P_STATED + " %），以及界限条件 U（转台"
-                   "误差取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
-                   "±{bound}°——按最不利组合线性合成为 a，加上拟合的 k·u：U = a + k·u；在界限内任一"
-                   "转台误差下包含概率均不低于此值；见本表及交叉轴表的“界限条件 U”列，K(ϑ, U) 的见 "
-                   "results.json）。本证书给出的是{which}（由规程的不确定度表述选项选定）。"),
-    "which_gum": ("the JCGM 100 U", "JCGM 100 的 U"),
-    "which_bound": ("the bound-condition U (each cell the interval value ± U, no k)",
-                    "界限条件 U（各格为区间 值 ± U，无 k）"),
-    "u_mc": ("u (Monte Carlo)", "u（蒙特卡洛）"),
+    "bound_note": ("One statement per item. The items the rate table enters (M, S, L and "
+                   "K(ϑ, U)) are stated by the bound-condition interval: the table's errors at "
+                   "their bounds — rate error at {rate_bound} relative, its certificate's "
+                   "expanded uncertainty, every axis component at ±{bound}° — in their worst "
+                   "combination, a, plus k·u of the other lines: U = a + k·u, with probability "
+                   "at least p = " + P_STATED + " % at every table error within the bounds; no "
+                   "coverage factor of the whole. The other items (b, b(ϑ, U), ARW) are value ± "
+                   "U, U = k·u, each with its own k. Conformity is decided on these statements.",
+                   "每项一个表述。受速率转台影响的项（M、S、L 及 K(ϑ, U)）以界限条件区间表述：转台误差"
+                   "取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
+                   "±{bound}°——按最不利组合线性合成为 a，加上其他分量的 k·u：U = a + k·u；在界限内任一"
+                   "转台误差下包含概率不低于 p = " + P_STATED + " %；整体无包含因子。其余各项（b、b(ϑ, U)、"
+                   "ARW）为 值 ± U，U = k·u，各有其 k。符合性按这些表述判定。"),
     "nu": ("ν", "ν"),
     "h_thermal": ("Temperature and supply model", "温度与电源电压模型"),
     "thermal_note": ("K(ϑ, U) and b(ϑ, U) as polynomials in ϑ = T − {tref} °C and U = V − {vref} V, "
@@ -137,15 +132,18 @@ TEXT = {
                    "在温度试验设定点的校准值"),
     "points_note": ("K(ϑ, U) and b(ϑ, U) of the gyro soaked at each chamber set point T and "
                     "supply V (ϑ: the reading of the gyro's sensor there, relative to {tref} °C, "
-                    "at which the model is evaluated), ARW(ϑ) at each set point; each cell "
-                    "value ± U with its own k = t(ν_eff) for a coverage probability of "
-                    "p = " + P_STATED + " %. U includes the fit, the "
+                    "at which the model is evaluated), ARW(ϑ) at each set point; one statement "
+                    "per cell, coverage probability p = " + P_STATED + " %: K the bound-condition "
+                    "interval (U = a + k·u, a = |K| × the rate error at its bound; k of the "
+                    "other lines in its k column), b and ARW value ± U with their own "
+                    "k = t(ν_eff). U includes the fit, the "
                     "model order (the spread of the candidate orders' values at the point) and "
                     "the temperature reading; the bias is {bias}. The polynomial coefficients "
                     "below are information, not certified values.",
                     "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
                     "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
-                    " 值 ± U，各自的 k = t(ν_eff)，包含概率 p = " + P_STATED + " %。U 含拟合、模型阶次（各候选阶次"
+                    "每格一个表述，包含概率 p = " + P_STATED + " %：K 为界限条件区间（U = a + k·u，a = |K| × 速率误差界限；"
+                    "k 列为其他分量的 k），b 与 ARW 为 值 ± U，各自的 k = t(ν_eff)。U 含拟合、模型阶次（各候选阶次"
                     "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
     "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
                        "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
@@ -187,8 +185,10 @@ TEXT = {
 READINGS_TAKEN_ZH = (
     "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
     "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
-    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 p = " + P_STATED + " %；运行了试验时旁列蒙特卡洛法"
-    "（JCGM 101）标准不确定度。",
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 p = " + P_STATED + " %；受速率转台影响的项"
+    "（M、S、L、K）以界限条件区间 值 ± (a + k·u) 表述：转台误差取其界限按最不利组合为 a，加上其他分量的 "
+    "k·u；每项一个表述。这些项的 JCGM 100 U 及运行了试验时的蒙特卡洛法（JCGM 101）u 载于 "
+    "results.json 的细节中，非校准结果。",
     "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
     "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"

@@ -30,7 +30,6 @@ from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
-from gonio.specs.triad_alignment.calibration import total_coverage_factor
 from gonio.specs.triad_alignment.figures import (alignment_panels, language,
                                                  thermal_check_panels, thermal_model_panels)
 
@@ -87,25 +86,22 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                     + [_pm(res, f"b_{a}", with_k=True)])
     out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})"], rows),
                      {"widths": (0.08, 0.23, 0.23, 0.23, 0.23), "id": "alignment-matrix"}))
-    minv, uminv = al["derived"]["alignment_matrix"], al["u_derived"]["alignment_matrix"]
-    tb_inv = ((al.get("type_b") or {}).get("u_derived") or {}).get("alignment_matrix")
-    nu_min = min(al["dof"])
+    inv = res["extra"]["alignment_inverse"]
 
     def inv_cell(n: int) -> list:
-        """M⁻¹ element n ± U with the k of its own total (the fit's ν, the table's ∞)."""
-        u_b = float(tb_inv[n]) if tb_inv else 0.0
-        k = total_coverage_factor(float(uminv[n]), u_b, float(nu_min))
-        return [_pm_scaled(minv[n], k * uminv[n]), f" (k = {display('k', k)})"]
+        """M⁻¹ element n: its bound-condition interval, as M's cells (``extra.alignment_inverse``,
+        decided in the calibration)."""
+        return [_pm_scaled(inv[n]["value"], inv[n]["U"]), f" ({T('bound_tag')})"]
     out.append(Block("sub", T("sub_inverse", unit=unit)))
     out.append(Block("table", (["", "G_x", "G_y", "G_z"], [
         [f"ω_{a}"] + [inv_cell(3 * i + j) for j in range(3)]
         for i, a in enumerate(AXES)]), {"widths": (0.1, 0.3, 0.3, 0.3), "id": "alignment-inverse"}))
     out.append(Block("sub", T("sub_cross")))
     out.append(Block("p", [T("cross_note")]))
-    mc = al.get("u_monte_carlo")
     crow = []
+
     def cell(key: str) -> list:
-        """S or L in ‰: value ± U (k = …) of its own budget, or value ± U (bound)."""
+        """S or L in ‰: value ± U (bound condition), or value ± U (k = …) of its own budget."""
         it = items[key]
         unc = it["uncertainty"]
         if unc.get("k") is None:
@@ -113,18 +109,10 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
         return [_pm_scaled(it["value"], unc["U"], 1e3), " (k = ",
                 num(res, f"items.{key}.uncertainty.k", "k"), ")"]
 
-    def bound_u(key: str) -> str:
-        bc = (items[key].get("details") or {}).get("bound_condition")
-        return display_uncertainty(bc["U"] * 1e3) if bc else "—"
-    for n, p in enumerate(OFFDIAG):
-        s = items[f"S_{p}"]
-        k = s["uncertainty"]["k"] or (s.get("details") or {}).get("gum", {}).get("k")
-        crow.append([f"{p[0]} ← ω_{p[1]}", cell(f"S_{p}"),
-                     display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc and k else "—",
-                     cell(f"L_{p}"), f"{bound_u(f'S_{p}')} / {bound_u(f'L_{p}')}"])
-    out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col"),
-                                T("SL_bound")], crow),
-                     {"widths": (0.16, 0.24, 0.18, 0.24, 0.18), "id": "cross-axis"}))
+    for p in OFFDIAG:
+        crow.append([f"{p[0]} ← ω_{p[1]}", cell(f"S_{p}"), cell(f"L_{p}")])
+    out.append(Block("table", ([T("pair"), T("S_col"), T("L_col")], crow),
+                     {"widths": (0.2, 0.4, 0.4), "id": "cross-axis"}))
     av = items["averaging_time"]
     if av["measured"]:
         d = av["details"]
@@ -139,40 +127,45 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     if al["outliers"]:
         out.append(Block("p", [T("outliers", list=", ".join(
             f"line {o['line']} ({o['channel']}, w = {o['weight']:.2f})" for o in al["outliers"]))]))
-    # uncertainty of M and b: GUM and Monte Carlo
+    # uncertainty of M and b: the certified statement's budget, one row per item
     out.append(Block("sub", T("h_unc")))
-    trials = (items["M_xx"]["uncertainty"].get("monte_carlo") or {}).get("trials")
+    trials = ((items["M_xx"].get("details") or {}).get("not_certified", {})
+              .get("monte_carlo") or {}).get("trials")
     tb = al.get("type_b") or {"rate_u_rel": 0.0, "orientation_u_rad": 0.0}
     out.append(Block("p", [T("unc_note", mc=T("mc_trials", n=trials) if trials else T("mc_none"),
                              rate=display("sig3", tb["rate_u_rel"]),
                              bound=display("sig3", math.degrees(tb["orientation_u_rad"])
                                            * math.sqrt(3.0)))]))
-    bc_xx = items["M_xx"].get("details", {}).get("bound_condition")
-    which = items["M_xx"].get("details", {}).get("statement", "gum")
-    if bc_xx:
+    if (items["M_xx"].get("details") or {}).get("bound_condition"):
         out.append(Block("p", [T("bound_note", rate_bound=display(
             "sig3", (al.get("type_b") or {}).get("rate_bound_rel", 0.0)),
-            bound=display("sig3", math.degrees(tb["orientation_u_rad"]) * math.sqrt(3.0)),
-            which=T("which_" + which))]))
+            bound=display("sig3", math.degrees(tb["orientation_u_rad"]) * math.sqrt(3.0)))]))
     urows = []
     for key in [f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]:
-        unc = items[key]["uncertainty"]
-        m = unc.get("monte_carlo")
-        bc = items[key].get("details", {}).get("bound_condition")
-        gum = items[key].get("details", {}).get("gum")
-        urows.append([key, num(res, f"items.{key}.uncertainty.u_c", "sig2"),
-                      num(res, f"items.{key}.uncertainty.monte_carlo.u", "sig2") if m else "—",
-                      num(res, f"items.{key}.uncertainty.nu_eff", "nu"),
-                      num(res, f"items.{key}.uncertainty.k", "k") if unc.get("k") is not None
-                      else display("k", gum["k"]),
-                      num(res, f"items.{key}.uncertainty.U", "U") if unc.get("k") is not None
-                      else display_uncertainty(gum["U"]),
-                      display_uncertainty(bc["U"]) if bc else "—", items[key]["unit"]])
-    out.append(Block("table", (["", T("u_gum"), T("u_mc"), T("nu"), "k", "U", T("U_bound"),
-                                L["unit"]], urows),
-                     {"widths": (0.08, 0.12, 0.14, 0.07, 0.08, 0.12, 0.13, 0.26),
+        urows.append([key] + _budget_cells(res, key) + [items[key]["unit"]])
+    out.append(Block("table", (["", T("a_col"), T("u_col"), T("nu"), "k", "U", L["unit"]],
+                               urows),
+                     {"widths": (0.08, 0.14, 0.14, 0.08, 0.08, 0.14, 0.34),
                       "id": "uncertainty"}))
     return out
+
+
+def _budget_cells(res: dict, key: str) -> list:
+    """The certified statement's budget of item ``key`` in one row, U = a + k·u: a bound-
+    condition item (k None) its table's worst-case offset a, the other lines' u, their ν
+    and k (``details.bound_condition``); any other item "—" for a, its u_c, ν_eff, k. Each
+    row its own k; the row's U is the item's certified U."""
+    it = res["items"][key]
+    unc = it["uncertainty"]
+    big_u = num(res, f"items.{key}.uncertainty.U", "U")
+    bc = (it.get("details") or {}).get("bound_condition")
+    if unc.get("k") is None and bc:
+        base = f"items.{key}.details.bound_condition"
+        return [num(res, f"{base}.a_table", "sig2"), num(res, f"{base}.u_rest", "sig2"),
+                num(res, f"{base}.nu_rest", "nu"), num(res, f"{base}.k_rest", "k"), big_u]
+    return ["—", num(res, f"items.{key}.uncertainty.u_c", "sig2"),
+            num(res, f"items.{key}.uncertainty.nu_eff", "nu"),
+            num(res, f"items.{key}.uncertainty.k", "k"), big_u]
 
 
 def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
@@ -240,6 +233,16 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
     return out
 
 
+def _k_of(res: dict, key: str):
+    """The k of item ``key``'s column: its own coverage factor, or for a bound-condition
+    statement (no k of the whole) the k of the lines beside the table's bound, k_rest
+    (U = a + k_rest·u_rest, ``details.bound_condition``)."""
+    it = res["items"][key]
+    if it["uncertainty"].get("k") is None and (it.get("details") or {}).get("bound_condition"):
+        return num(res, f"items.{key}.details.bound_condition.k_rest", "k")
+    return num(res, f"items.{key}.uncertainty.k", "k")
+
+
 def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
     """The certified values of gyro ``ch``: K and b at every set point (rows) and supply
     level (a value ± U and a k column each), ARW at every set point — the items
@@ -258,15 +261,17 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
     for name in ("K", "b"):
         unit = (items.get(f"{name}_{ch}_t1_v1") or {}).get("unit", "")
         head = ["T (°C)", "ϑ (°C)"]
+        by_interval = (items.get(f"{name}_{ch}_t1_v1") or {}).get(
+            "uncertainty", {}).get("k", 0) is None
         for _, v in levels:
-            head += [f"{name} ({display('sig3', v)} V) ± U", "k"]
+            head += [f"{name} ({display('sig3', v)} V) " + ("[interval]" if by_interval
+                                                              else "± U"), "k"]
         rows = []
         for i, t_set, theta in temps:
             row = [display("sig3", t_set), f"{theta:+.1f}"]
             for j, _ in levels:
                 key = f"{name}_{ch}_t{i}_v{j}"
-                row += ([_pm(res, key), num(res, f"items.{key}.uncertainty.k", "k")]
-                        if key in items else ["—", "—"])
+                row += [_pm(res, key), _k_of(res, key)] if key in items else ["—", "—"]
             rows.append(row)
         out.append(Block("p", [T("points_unit", name=name, unit=unit_text(unit))]))
         share = 0.8 / len(levels)

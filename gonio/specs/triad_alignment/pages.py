@@ -20,7 +20,8 @@ from scipy import stats
 
 from gonio.specs.triad_alignment.thermal_model import Compensation, ThermalModelResult
 from gonio.specs.triad_alignment.analysis import COVERAGE, OFFDIAG, AlignmentResult, cross_axis_table
-from gonio.specs.triad_alignment.calibration import alignment_items, total_coverage_factor
+from gonio.specs.triad_alignment.calibration import (_fit_part, alignment_items, bound_condition,
+                                                    total_coverage_factor)
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display, display_uncertainty, round_half_up
@@ -73,7 +74,7 @@ def certified_cell(item, factor: float = 1.0) -> str:
     n = item_nums(item.to_json(), f"items.{item.key}", sig=6, factor=factor)
     if n["interval"] is not None:
         lo, hi = n["interval"]["ends"]
-        return f"[{lo}, {hi}]"
+        return f"{n['value']} [{lo}, {hi}]"
     if n["U"] is None:
         return str(n["value"] or "—")
     return f"{n['value']} ± {n['U']} (k = {n['k']})"
@@ -94,17 +95,6 @@ def with_k(value: float, big_u: float, k: float) -> str:
     return txt if "±" not in txt else f"{txt} (k = {display('k', k)})"
 
 
-def bound_cell(item, factor: float = 1.0) -> str:
-    """The bound-condition statement of an item beside its GUM one: "± U_bound (a + k·u)"
-    (:func:`gonio.specs.triad_alignment.calibration.bound_condition`), "—" for an item the
-    table does not enter."""
-    bc = (item.details or {}).get("bound_condition")
-    if not bc:
-        return "—"
-    return (f"± {display_uncertainty(bc['U'] * factor)} (a = "
-            f"{display_uncertainty(bc['a_table'] * factor)}, k = {display('k', bc['k_rest'])})")
-
-
 def alignment_page(res: AlignmentResult, figure: Figure | None = None,
                    static_s: float = 0.0) -> str:
     """HTML section: M, b, M⁻¹, scale factors, misalignment angles, cross-axis
@@ -122,14 +112,22 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
     nu_min = float(np.min(res.dof))
 
     def derived_cell(name: str, n: int, value: float, factor: float = 1.0) -> str:
-        """value ± U (k = …) of element n of derived quantity ``name``, k its own."""
+        """Element n of derived quantity ``name``, one statement as the certified items: where
+        the rate table enters it (a > 0), the bound-condition interval value ± (a + k·u_fit)
+        (:func:`bound_condition`, no k of the whole); else value ± U (k = …), k its own."""
         u = float(np.ravel(res.u_derived[name])[n])
         u_b = float(np.ravel(tb["u_derived"][name])[n]) if tb else 0.0
+        a = float(np.ravel(tb["a_derived"][name])[n]) if tb else 0.0
+        if a > 0:
+            bc = bound_condition(value, a, _fit_part(u, u_b), nu_min)
+            return f"{value_with_u(value * factor, bc['U'] * factor)} (bound condition)"
         k = total_coverage_factor(u, u_b, nu_min)
         return with_k(value * factor, k * u * factor, k)
 
-    out = [f"<h2>Alignment matrix (U for p = {p_text(COVERAGE)} %, every cell with the k of its own "
-           "budget, t(ν_eff): the fit and the rate table)</h2>",
+    out = [f"<h2>Alignment matrix (p = {p_text(COVERAGE)} %, one statement per cell: where the "
+           "rate table enters, the bound-condition interval value ± (a + k·u) — the table's "
+           "errors at their bounds, worst combination, a, plus k·u of the fit, no k of the "
+           "whole; elsewhere value ± U with the cell's own k)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
            f"{' (robust fit)' if res.robust else ''}; b as the certificate states b_i: "
@@ -152,35 +150,15 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
                        for i, a_ in enumerate("xyz")]))
     tab = cross_axis_table(res)
     out.append("<p>Cross-axis sensitivity S_ij = M_ij/M_ii (IEC 62047-20 5.2), in ‰; "
-               "residual leakage after M⁻¹ (stated 0): expanded uncertainty in ‰; every cell "
-               "with its own k.</p>")
+               "residual leakage after M⁻¹ (stated 0), in ‰; each cell its certified "
+               "statement (the bound-condition interval, as on the certificate). The JCGM 100 "
+               "U and the Monte Carlo u of these items are in results.json, not certified.</p>")
     rows = []
     for r in tab.itertuples(index=False):
-        s_item = items[f"S_{r.gyro}{r.about}"]
-        k_s = s_item.uncertainty.k
-        l_item = items[f"L_{r.gyro}{r.about}"]
-        rows.append([f"gyro {r.gyro} ← ω_{r.about}", certified_cell(s_item, 1e3),
-                     "—" if not math.isfinite(r.u_mc) or k_s is None else
-                     f"{display_uncertainty(k_s * r.u_mc * 1e3)} (k = {display('k', k_s)})",
-                     certified_cell(l_item, 1e3)])
-    out.append(_table(["", "S (GUM)", "U (Monte Carlo, the fit's noise only)",
-                       "leakage after"], rows))
-    out.append("<p>Bound-condition statement beside the GUM's (the rate table's errors at "
-               "their bounds — rate error at its certificate's expanded uncertainty, every "
-               "axis component at the fixture's bound — in their worst combination, a, plus "
-               f"k·u of the fit: U = a + k·u; at least the same p = {p_text(COVERAGE)} % at every table error "
-               "within the bounds, where the GUM's U holds over their distribution). Which of the two a "
-               "certificate certifies is the protocol's <code>[alignment] "
-               "uncertainty_statement</code> (default gum); this page: "
-               f"{html.escape(items['M_xx'].details.get('statement', 'gum'))}.</p>")
-    out.append(_table(["", "M (bound)", "S ‰ (bound)", "leakage ‰ (bound)"],
-                      [[f"{r.gyro} ← ω_{r.about}",
-                        bound_cell(items[f"M_{r.gyro}{r.about}"]),
-                        bound_cell(items[f"S_{r.gyro}{r.about}"], 1e3),
-                        bound_cell(items[f"L_{r.gyro}{r.about}"], 1e3)]
-                       for r in tab.itertuples(index=False)]
-                      + [[f"{a_} ← ω_{a_}", bound_cell(items[f"M_{a_}{a_}"]), "—", "—"]
-                         for a_ in "xyz"]))
+        rows.append([f"gyro {r.gyro} ← ω_{r.about}",
+                     certified_cell(items[f"S_{r.gyro}{r.about}"], 1e3),
+                     certified_cell(items[f"L_{r.gyro}{r.about}"], 1e3)])
+    out.append(_table(["", "S before", "leakage after"], rows))
     if res.averaging is not None:
         av = res.averaging
         out.append(f"<p>Averaging time (Allan deviation): limit {av.noise_limit_dps:.4g} °/s "

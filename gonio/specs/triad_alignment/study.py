@@ -57,7 +57,7 @@ from gonio.specs.triad_alignment.analysis import RATE_ERROR_BOUND_K, table_type_
 from gonio.specs.triad_alignment.bench import TriadBench, load_triad_bench, load_triad_protocol
 from gonio.specs.triad_alignment.simulate import for_trial
 
-__all__ = ["CASES", "CASE_KEYS", "BOUND_SUFFIX", "bound_record", "FIXED_CONDITION_CASES", "RATE_ERROR_BOUND_K", "worst_table",
+__all__ = ["CASES", "CASE_KEYS", "GUM_SUFFIX", "gum_record", "FIXED_CONDITION_CASES", "RATE_ERROR_BOUND_K", "worst_table",
            "table_bias", "case_bench", "triad_trial", "realised_leakage", "TriadJob", "TriadStudy",
            "TriadReport", "plan_study"]
 
@@ -207,33 +207,32 @@ def triad_trial(seed: int, protocol: str = "triad-alignment", bench="mems-triad"
                     "truth": float(leak.get(key, truth[key]["value"])),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
                     **stated_record(it.uncertainty)}
-        bc = (it.details or {}).get("bound_condition")
-        if bc and bc["k_rest"] > 0:
-            out[f"{key} {BOUND_SUFFIX}"] = bound_record(out[key], bc)
+        gum = ((it.details or {}).get("not_certified") or {}).get("gum")
+        if gum:
+            out[f"{key} {GUM_SUFFIX}"] = gum_record(out[key], gum)
     return out, no_truth
 
 
-#: The suffix of an item's bound-condition row in the study (the statement of
-#: :func:`gonio.specs.triad_alignment.calibration.bound_condition`, beside the GUM row).
-BOUND_SUFFIX = "[bound]"
+#: The suffix of an item's row for its JCGM 100 U, which the calibration keeps in the item's
+#: details as not certified (:func:`gonio.specs.triad_alignment.calibration.not_certified`):
+#: the item's own row is its certified statement (the bound-condition interval).
+GUM_SUFFIX = "[gum, not certified]"
 
 
-def bound_record(gum: dict, bc: dict) -> dict:
-    """The study's record of an item's bound-condition statement: covered when |value −
-    truth| ≤ U_bound; z = (value − truth)/(U_bound / k_GUM), the error in units of the bound
-    statement's width at the GUM statement's k (u_c × U_bound/U_GUM), so |z| ≤ k_GUM exactly
-    when it covers and its z is the GUM row's z × U_GUM/U_bound. Where the table's errors are
-    drawn (``typeb``) its z sd is expected below the GUM row's (conservative: the bound holds
-    at every table error within the bounds, so over their distribution it is wider than
-    needed).
+def gum_record(certified: dict, gum: dict) -> dict:
+    """The study's record of an item's not-certified JCGM 100 U (``details.not_certified.
+    gum``) beside its certified row: covered when |value − truth| ≤ U_GUM, z = (value −
+    truth)/u_c — the same z as the certified row's (both on the budget's u_c), so the two
+    rows differ in coverage only.
 
-    >>> r = bound_record({"clause": "c", "value": 1.0, "truth": 0.9, "U": 0.2, "u_c": 0.1},
-    ...                  {"U": 0.5, "k_rest": 2.5})
-    >>> r["U"], r["u_c"], r["clause"]
-    (0.5, 0.25, 'c (bound)')
+    >>> r = gum_record({"clause": "c", "value": 1.0, "truth": 0.9, "U": 0.5, "u_c": 0.1,
+    ...                 "interval": [0.5, 1.5], "nu": None}, {"U": 0.2, "u_c": 0.1})
+    >>> r["U"], r["u_c"], r["clause"], "interval" in r
+    (0.2, 0.1, 'c (JCGM 100, not certified)', False)
     """
-    return {"clause": f"{gum['clause']} (bound)", "value": gum["value"], "truth": gum["truth"],
-            "U": float(bc["U"]), "u_c": float(gum["u_c"]) * float(bc["U"]) / float(gum["U"])}
+    return {"clause": f"{certified['clause']} (JCGM 100, not certified)",
+            "value": certified["value"], "truth": certified["truth"],
+            "U": float(gum["U"]), "u_c": float(gum["u_c"])}
 
 
 def realised_leakage(res, truth: dict) -> dict[str, float]:
