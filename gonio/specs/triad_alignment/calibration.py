@@ -271,7 +271,7 @@ def total_coverage_factor(u_total: float, u_b: float, nu_fit: float) -> float:
     ``u_b`` and whose fit part has ν = ``nu_fit`` (the k an item's budget gives,
     :func:`with_table_type_b`), for the values that are not items (the report page's M⁻¹,
     scale factors, angles)."""
-    return coverage_k(nu_with_table(_fit_part(u_total, u_b), nu_fit, u_b), COVERAGE)
+    return coverage_k(nu_with_table(fit_part(u_total, u_b), nu_fit, u_b), COVERAGE)
 
 
 def table_inputs(readings: TriadReadings) -> dict:
@@ -292,7 +292,7 @@ def fit_alignment(readings: TriadReadings, **options) -> AlignmentResult:
     return estimate_alignment(readings, **options, **table_inputs(readings))
 
 
-def _fit_part(u_total: float, u_b: float) -> float:
+def fit_part(u_total: float, u_b: float) -> float:
     """The fit's part of a total standard uncertainty whose table part is ``u_b`` (the two
     covariances add, so do the variances of any first-order propagation)."""
     return math.sqrt(max(u_total ** 2 - u_b ** 2, 0.0))
@@ -371,7 +371,7 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
             key = f"M_{AXES[i]}{AXES[j]}"
             items[key] = both(key, "§4 eq. 14", f"system matrix {key}", f"{unit}/(°/s)",
                               float(al.system_matrix[i, j]),
-                              _type_a(key, fit, _fit_part(um[i, j], ub_m[i, j]),
+                              _type_a(key, fit, fit_part(um[i, j], ub_m[i, j]),
                                       _nu(al, i, j), None if mc_m is None else mc_m[i, j],
                                       trials), float(ub_m[i, j]), float(a_m[i, j]))
     u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
@@ -404,7 +404,7 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
         items[key] = both(key, "IEC 62047-20 5.2", f"cross-axis sensitivity {key} = "
                           f"M_{r.gyro}{r.about}/M_{r.gyro}{r.gyro}", "1", float(r.sensitivity),
                           _type_a(key, "first-order propagation of the fit (JCGM 100 5.1.2)",
-                                  _fit_part(r.u_gum, float(ub_s[n])), al.dof[i], r.u_mc,
+                                  fit_part(r.u_gum, float(ub_s[n])), al.dof[i], r.u_mc,
                                   trials), float(ub_s[n]), float(a_s[n]))
     for name in OFFDIAG:
         i, j = AXES.index(name[0]), AXES.index(name[1])
@@ -412,7 +412,7 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
         items[key] = both(key, "§4 M̂⁻¹M − I", f"residual leakage after alignment {key} "
                           "(M̂⁻¹M − I)", "1", 0.0,
                           _type_a(key, "δL = −M̂⁻¹ δM, first order",
-                                  _fit_part(al.leakage_u[i, j], ub_l[i, j]), nu_min),
+                                  fit_part(al.leakage_u[i, j], ub_l[i, j]), nu_min),
                           float(ub_l[i, j]), float(a_l[i, j]))
     av = al.averaging
     if av is None:
@@ -450,7 +450,7 @@ def inverse_bound(al: AlignmentResult) -> list[dict]:
     nu = float(np.min(al.dof))
     return [{"value": float(minv[n]),
              **bound_condition(float(minv[n]), float(a[n]),
-                               _fit_part(float(u_tot[n]), float(u_b[n])), nu)}
+                               fit_part(float(u_tot[n]), float(u_b[n])), nu)}
             for n in range(9)]
 
 

@@ -20,7 +20,7 @@ from scipy import stats
 
 from gonio.specs.triad_alignment.thermal_model import Compensation, ThermalModelResult
 from gonio.specs.triad_alignment.analysis import COVERAGE, OFFDIAG, AlignmentResult, cross_axis_table
-from gonio.specs.triad_alignment.calibration import (_fit_part, alignment_items, bound_condition,
+from gonio.specs.triad_alignment.calibration import (alignment_items, bound_condition, fit_part,
                                                     total_coverage_factor)
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
@@ -119,7 +119,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
         u_b = float(np.ravel(tb["u_derived"][name])[n]) if tb else 0.0
         a = float(np.ravel(tb["a_derived"][name])[n]) if tb else 0.0
         if a > 0:
-            bc = bound_condition(value, a, _fit_part(u, u_b), nu_min)
+            bc = bound_condition(value, a, fit_part(u, u_b), nu_min)
             return f"{value_with_u(value * factor, bc['U'] * factor)} (bound condition)"
         k = total_coverage_factor(u, u_b, nu_min)
         return with_k(value * factor, k * u * factor, k)
