@@ -86,7 +86,9 @@ def test_summary_has_no_second_statement(demo):
             if by_interval(it):
                 assert " ± " not in ln and "k = " not in ln, (key, ln)
                 iv = it["uncertainty"].get("interval")
-                if iv is not None and iv[0] > 0:     # two-sided (JJF 7.2.6/7.2.7's outcome)
+                # two-sided: JJF 7.2.6/7.2.7's outcome, or a signed quantity's interval (the
+                # triad's bound-condition statement of M, S, L, K)
+                if iv is not None and (iv[0] > 0 or not it.get("nonnegative")):
                     assert "interval [" in ln and "≤ " not in ln, (key, ln)
                 else:
                     assert "≤ " in ln, (key, ln)
@@ -195,8 +197,8 @@ def test_numbers_agree_across_outputs(demo):
         if st.nu_eff is not None:
             assert spans.get((key, "uncertainty.nu_eff"), {st.nu_eff}) == {st.nu_eff}, key
         if st.interval is not None and (key, value_field(it)) in spans:
-            assert (f"≤ {st.interval_ends[1]}" if st.upper is not None else
-                    f"[{st.interval_ends[0]}, {st.interval_ends[1]}]") in html, key
+            lo, hi = (minus_sign(e) for e in st.interval_ends)   # negative ends print U+2212
+            assert (f"≤ {hi}" if st.upper is not None else f"[{lo}, {hi}]") in html, key
         # summary.txt: one line holds the value with its U and k, or with its interval
         # (a non-negative item whose estimate fell below zero: its upper bound alone)
         want = [f"≤ {st.interval_ends[1]}"] if st.below_zero else \

@@ -123,7 +123,9 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
             key = f"M_{a}{b}"
             it = res["items"][key]
             U_txt, dec = two_sig(it["uncertainty"]["U"])
-            assert spans[f"items.{key}.uncertainty.U"] == U_txt
+            # the uncertainty table's U = a + k·u of the interval (no U span beside an interval)
+            assert spans[f"items.{key}.details.bound_condition.U"] == U_txt
+            assert f"items.{key}.uncertainty.U" not in spans
             assert spans[f"items.{key}.value"] == half_up(it["value"], dec)
     for key in ("b_z_t5_v2", "ARW_z_t3"):   # the certified points, value ± U (k)
         it = res["items"][key]

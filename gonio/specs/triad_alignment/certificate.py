@@ -91,6 +91,7 @@ TEXT = {
     "a_col": ("a (table at its bounds)", "a（转台误差取界限）"),
     "u_col": ("u (fit; other lines)", "u（拟合及其他分量）"),
     "bound_tag": ("bound condition", "界限条件"),
+    "interval_head": ("[interval]", "[区间]"),
     "bound_note": ("One statement per item. The items the rate table enters (M, S, L and "
                    "K(ϑ, U)) are stated by the bound-condition interval: the table's errors at "
                    "their bounds — rate error at {rate_bound} relative, its certificate's "

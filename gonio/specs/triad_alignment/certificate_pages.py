@@ -157,15 +157,16 @@ def _budget_cells(res: dict, key: str) -> list:
     row its own k; the row's U is the item's certified U."""
     it = res["items"][key]
     unc = it["uncertainty"]
-    big_u = num(res, f"items.{key}.uncertainty.U", "U")
     bc = (it.get("details") or {}).get("bound_condition")
-    if unc.get("k") is None and bc:
+    if unc.get("k") is None and bc:     # the interval's half-width as its budget's sum
         base = f"items.{key}.details.bound_condition"
         return [num(res, f"{base}.a_table", "sig2"), num(res, f"{base}.u_rest", "sig2"),
-                num(res, f"{base}.nu_rest", "nu"), num(res, f"{base}.k_rest", "k"), big_u]
+                num(res, f"{base}.nu_rest", "nu"), num(res, f"{base}.k_rest", "k"),
+                num(res, f"{base}.U", "U")]
     return ["—", num(res, f"items.{key}.uncertainty.u_c", "sig2"),
             num(res, f"items.{key}.uncertainty.nu_eff", "nu"),
-            num(res, f"items.{key}.uncertainty.k", "k"), big_u]
+            num(res, f"items.{key}.uncertainty.k", "k"),
+            num(res, f"items.{key}.uncertainty.U", "U")]
 
 
 def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
@@ -264,7 +265,7 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
         by_interval = (items.get(f"{name}_{ch}_t1_v1") or {}).get(
             "uncertainty", {}).get("k", 0) is None
         for _, v in levels:
-            head += [f"{name} ({display('sig3', v)} V) " + ("[interval]" if by_interval
+            head += [f"{name} ({display('sig3', v)} V) " + (T("interval_head") if by_interval
                                                               else "± U"), "k"]
         rows = []
         for i, t_set, theta in temps:
