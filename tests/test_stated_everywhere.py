@@ -130,12 +130,21 @@ def test_triad_matrices_as_lists_with_uncertainty(run):
     root = etree.fromstring(run["dcc"])
     rl = root.find(".//dcc:result[@id='matrix-system-matrix-M']//si:realListXMLList", NS)
     values = rl.find("si:valueXMLList", NS).text.split()
-    Us = rl.find("si:measurementUncertaintyUnivariateXMLList/si:expandedMUXMLList/"
-                 "si:valueExpandedMUXMLList", NS).text.split()
     res = run["res"]["items"]
     keys = [f"M_{a}{b}" for a in "xyz" for b in "xyz"]
     assert values == [dsi_decimal(item_statement(res[k]).value_text) for k in keys]
-    assert Us == [dsi_decimal(item_statement(res[k]).U_text) for k in keys]
+    # M is stated by its bound-condition interval (one statement): the list carries the
+    # intervals each item's result states, no expanded U or k
+    mu = rl.find("si:measurementUncertaintyUnivariateXMLList", NS)
+    assert mu.find("si:expandedMUXMLList", NS) is None
+    iv = mu.find("si:coverageIntervalMUXMLList", NS)
+    for tag, end in (("si:intervalMinXMLList", 0), ("si:intervalMaxXMLList", 1)):
+        assert iv.find(tag, NS).text.split() == [
+            dsi_decimal(item_statement(res[k]).interval_ends[end]) for k in keys], tag
+    for k in keys:                     # the same ends as the item's own result
+        one = root.find(f".//dcc:result[@id='result-{k}']//si:coverageIntervalMU", NS)
+        assert one.find("si:intervalMin", NS).text == dsi_decimal(
+            item_statement(res[k]).interval_ends[0]), k
 
 
 def test_a_decided_conformity_reaches_certificate_and_dcc(run, tmp_path):
