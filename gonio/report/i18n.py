@@ -201,6 +201,12 @@ LABELS: dict[str, dict[str, str]] = {
                            "at least every record's own χ² upper bound at its own ν",
                      "zh": "若干标准偏差中的最大者给出其 χ² 区间：扣除取最大值的选择偏差（取其界限的"
                            "中点），区间按该界限加宽，上端不低于各记录按其自身 ν 的 χ² 上限"},
+    "k_iv_bound": {"en": "a quantity the rate table's errors enter by its bound-condition interval "
+                         "value ± (a + k·u): the table's errors at their bounds in their worst "
+                         "combination, a, plus k·u of the other lines, which holds at every "
+                         "table error within the bounds",
+                   "zh": "受转台误差影响的量给出其界限条件区间 值 ± (a + k·u)：转台误差取其界限按最不利"
+                         "组合为 a，加上其他分量的 k·u，在界限内任一转台误差下成立"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},

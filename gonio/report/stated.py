@@ -153,7 +153,11 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
 
 
 #: the kinds of interval an item can be stated by, in the legend's order
-INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "own", "upper")
+INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "own", "upper")
+
+#: ``k_source`` prefix of a bound-condition statement (the triad's M, S, L, K: the rate
+#: table's errors at their bounds plus k·u of the rest), :func:`interval_kind` "bound".
+K_SOURCE_BOUND_PREFIX = "bound condition"
 
 
 def interval_kind(item: dict) -> str | None:
@@ -161,7 +165,8 @@ def interval_kind(item: dict) -> str | None:
     its own ``uncertainty.k_source`` (decided once, in the result): "chi2" (a standard
     deviation's χ²), "range" (a half range's normal range), "belt" (a bias-corrected range's
     confidence belt), "max_abs" (the extreme of magnitudes max_i |x_i|), "sel_max" (the
-    largest σ_i less its selection bias), "own" (its own distribution: Monte Carlo, folded
+    largest σ_i less its selection bias), "bound" (value ± (a + k·u): the table's errors at
+    their bounds plus k·u of the rest, the triad's), "own" (its own distribution: Monte Carlo, folded
     normal, pivot, outcome distribution), "upper" (a non-negative item's upper bound), or
     None (value ± U, or not measured).
 
@@ -179,6 +184,8 @@ def interval_kind(item: dict) -> str | None:
         return None
     if unc.get("k") is None and unc.get("interval") is not None:
         ks = unc.get("k_source") or ""
+        if ks.startswith(K_SOURCE_BOUND_PREFIX):
+            return "bound"
         return {"chi-square": "chi2", "normal range": "range", "neyman-belt": "belt",
                 K_SOURCE_MAX_ABS: "max_abs", K_SOURCE_MAX_MAGNITUDE: "max_abs",
                 K_SOURCE_SELECTED_MAX: "sel_max"}.get(ks, "own")
@@ -192,8 +199,9 @@ def interval_legend(items: dict, L: dict) -> str:
     kinds: dict[str, list[str]] = {}
     for it in items.values():
         kind = interval_kind(it) if isinstance(it, dict) else None
-        if kind:
-            kinds.setdefault(kind, []).append(str(it.get("clause") or ""))
+        clause = str(it.get("clause") or "")
+        if kind and clause not in kinds.setdefault(kind, []):     # each clause once
+            kinds[kind].append(clause)
     if not kinds:
         return ""
     zh = L["k_iv_head"].startswith("以")

@@ -56,13 +56,13 @@ TEXT = {
     "sub_cross": ("Cross-axis sensitivity (IEC 62047-20 5.2) and residual leakage after alignment",
                   "交叉轴灵敏度（IEC 62047-20 5.2）及对准后残余交叉耦合"),
     "cross_note": ("S_ij = M_ij/M_ii before alignment; after applying M⁻¹ the leakage "
-                   "M̂⁻¹M − I is zero for the estimate, with the expanded uncertainty shown "
-                   "(what the alignment leaves). Values in ‰.",
+                   "M̂⁻¹M − I is zero for the estimate, with its interval shown "
+                   "(what the alignment leaves). Values as ratios (1), each its interval.",
                    "对准前 S_ij = M_ij/M_ii；施加 M⁻¹ 后残余耦合 M̂⁻¹M − I 对估计值为零，表中给出其"
-                   "扩展不确定度（对准后残留的量）。单位 ‰。"),
+                   "扩展不确定度（对准后残留的量）。数值为比值（1），各为其区间。"),
     "pair": ("gyro ← rate about", "陀螺 ← 输入角速度轴"),
-    "S_col": ("S before (‰) ± U", "对准前 S（‰）± U"),
-    "L_col": ("leakage after (‰) ± U", "对准后残余（‰）± U"),
+    "S_col": ("S before [interval]", "对准前 S [区间]"),
+    "L_col": ("leakage after [interval]", "对准后残余 [区间]"),
     "averaging": ("Averaging time from the Allan deviation: τ = {tau} s (noise limit "
                   "ω sin ψ_T / 10 = {lim} °/s at ω = {w} °/s, ψ_T = {psi}°); shortest dwell "
                   "{dwell} s — {ok}.",

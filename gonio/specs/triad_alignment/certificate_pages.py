@@ -26,7 +26,7 @@ from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header
                                            screening_blocks, write_spec_certificate)
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block
-from gonio.report.stated import item_nums, num
+from gonio.report.stated import interval_legend, item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
@@ -101,13 +101,8 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     crow = []
 
     def cell(key: str) -> list:
-        """S or L in ‰: value ± U (bound condition), or value ± U (k = …) of its own budget."""
-        it = items[key]
-        unc = it["uncertainty"]
-        if unc.get("k") is None:
-            return [_pm_scaled(it["value"], unc["U"], 1e3), f" ({T('bound_tag')})"]
-        return [_pm_scaled(it["value"], unc["U"], 1e3), " (k = ",
-                num(res, f"items.{key}.uncertainty.k", "k"), ")"]
+        """S or L by the one statement rule (its interval; or value ± U (k = …))."""
+        return _pm(res, key, with_k=True)
 
     for p in OFFDIAG:
         crow.append([f"{p[0]} ← ω_{p[1]}", cell(f"S_{p}"), cell(f"L_{p}")])
@@ -136,6 +131,9 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                              rate=display("sig3", tb["rate_u_rel"]),
                              bound=display("sig3", math.degrees(tb["orientation_u_rad"])
                                            * math.sqrt(3.0)))]))
+    legend = interval_legend(items, L)      # what each item's interval is (the shared legend)
+    if legend:
+        out.append(Block("p", [legend]))
     if (items["M_xx"].get("details") or {}).get("bound_condition"):
         out.append(Block("p", [T("bound_note", rate_bound=display(
             "sig3", (al.get("type_b") or {}).get("rate_bound_rel", 0.0)),
