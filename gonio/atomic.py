@@ -39,7 +39,7 @@ import stat
 import sys
 import tempfile
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Callable, Iterable, Iterator
 
 from gonio.errors import GonioError
 
@@ -597,7 +597,8 @@ def active_stage(out: str | Path) -> Path | None:
 @contextlib.contextmanager
 def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
                source_sha256: str | None = None, what: str = "--out",
-               extra: dict | None = None) -> Iterator[Path]:
+               extra: dict | None = None,
+               before_swap: Callable[[Path], None] | None = None) -> Iterator[Path]:
     """Stage one run's whole output set and swap it into ``out`` when all parts are written.
 
     Refused before any work: an empty name, a place that is not a folder, a folder
@@ -605,8 +606,10 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
     existing readings/stream file — the last two unless ``force``. Files gonio did
     not write (and inputs inside ``out``) are kept in the new set, linked unchanged;
     a run that would write one of their names is refused at the swap. Another run into the same folder is refused while
-    this one holds the lock. On any exception (or SIGINT/SIGTERM raised as one) the
-    staging folder is removed and ``out`` is as before.
+    this one holds the lock. ``before_swap(stage)``: called with the finished set (its
+    manifest written) just before the swap, to accept it (``calibrate --record``: the
+    records take it first); whatever it raises refuses the set. On any exception (or
+    SIGINT/SIGTERM raised as one) the staging folder is removed and ``out`` is as before.
     """
     out = _check_dir_place(out, what)
     parent = out.parent
@@ -646,6 +649,8 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
         if foreign:
             info["foreign_files_kept"] = sorted(foreign)
         _manifest(stage, source_sha256, info or extra, exclude=foreign)
+        if before_swap is not None:         # refused: nothing of this set reaches ``out``
+            before_swap(stage)
         sigs = {signal.SIGINT, signal.SIGTERM}
         old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
         try:

@@ -100,7 +100,9 @@ def run(args) -> int:
                               lab=lab_d, lang=args.lang, dcc=args.dcc,
                               monte_carlo_trials=args.monte_carlo, inputs=inputs,
                               force=args.force, lab_file=args.lab,
-                              record={"gyro_type": registered} if registered else None, **given)
+                              record={"gyro_type": registered} if registered else None,
+                              before_swap=getattr(args, "before_swap", None),  # --record
+                              **given)
     status("")
     show(spec, result, args.json, lab_d, args.lang)
     return 0

@@ -1,6 +1,8 @@
 """``gonio db``: the records database from the command line (init, create-user, import,
-backup, restore), and the ``--record`` option of ``gonio calibrate`` (added here, so the
-calibrate command itself is not touched: it runs, then its output folder is imported)."""
+backup, restore), and the ``--record`` option of ``gonio calibrate`` (added here: the
+calibrate command runs as without it, and its finished output set is imported from the
+staging folder before it is moved into ``--out``, so a set the records refuse is never
+written)."""
 
 from __future__ import annotations
 
@@ -40,32 +42,7 @@ def register(sub) -> None:
                    help="the new roles, space- or comma-separated")
     q.add_argument("--reset-password", action="store_true")
     q.set_defaults(func=run_set_user, active=None)
-    q = dsub.add_parser("import", help="import gonio output folders as computed calibrations")
-    add_store_options(q)
-    q.add_argument("folders", nargs="+")
-    q.add_argument("--customer", default="(imported)")
-    q.add_argument("--protocol", default=None,
-                   help="the protocol file (or built-in name) the folders were computed with, "
-                        "when it is not the one results.json names")
-    q.add_argument("--lab", default=None, metavar="FILE",
-                   help="the laboratory file the folders were computed with: its decision "
-                        "rule and limits decide them at issue too")
-    q.add_argument("--readings", default=None, metavar="FILE",
-                   help="the readings file results.json was computed from, when it is not "
-                        "in the folder (gonio calibrate's output holds none); one folder only")
-    q.add_argument("--table-calibration", default=None, metavar="FILE",
-                   help="the rotary table's calibration file the folder was computed with "
-                        "(gonio calibrate --table-calibration FILE): kept with the "
-                        "calibration, its SHA-256 checked against results.json's; one folder "
-                        "only. A folder whose results.json records a table calibration is "
-                        "refused without it (or the --lab file naming it)")
-    q.add_argument("--user", default=None, metavar="NAME",
-                   help="the records user importing (recorded as the calibrations' creator, "
-                        "who may then neither review nor approve them; default $GONIO_USER), "
-                        "with their password in $GONIO_PASSWORD or asked on the terminal. "
-                        "A calibration imported without one cannot be reviewed")
-    add_attach_options(q)
-    q.set_defaults(func=run_import)
+    add_import(dsub)
     q = dsub.add_parser("attach", help="attach the registered standards used and the "
                                        "environment to a calibration not yet reviewed")
     add_store_options(q)
@@ -133,6 +110,42 @@ def register(sub) -> None:
     hook_calibrate(sub)
 
 
+def add_import(dsub) -> None:
+    """``gonio db import``: its options."""
+    q = dsub.add_parser("import", help="import gonio output folders as computed calibrations")
+    add_store_options(q)
+    q.add_argument("folders", nargs="+")
+    q.add_argument("--customer", default="(imported)")
+    q.add_argument("--protocol", default=None,
+                   help="the protocol file (or built-in name) the folders were computed with, "
+                        "when it is not the one results.json names")
+    q.add_argument("--lab", default=None, metavar="FILE",
+                   help="the laboratory file the folders were computed with: its decision "
+                        "rule and limits decide them at issue too")
+    q.add_argument("--readings", default=None, metavar="FILE",
+                   help="the readings file results.json was computed from, when it is not "
+                        "in the folder (gonio calibrate's output holds none); one folder only")
+    q.add_argument("--table-calibration", default=None, metavar="FILE",
+                   help="the rotary table's calibration file the folder was computed with "
+                        "(gonio calibrate --table-calibration FILE): kept with the "
+                        "calibration, its SHA-256 checked against results.json's; one folder "
+                        "only. A folder whose results.json records a table calibration is "
+                        "refused without it (or the --lab file naming it)")
+    q.add_argument("--option-file", action="append", default=[], metavar="OPTION=FILE",
+                   help="a file the folder was computed with by a specification's option "
+                        "(tilt=FILE for gonio calibrate --tilt FILE, thermal=FILE for "
+                        "--thermal FILE), when it is not in the folder or beside the "
+                        "readings: kept with the calibration, its SHA-256 checked against "
+                        "the manifest's; repeat for several; one folder only")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user importing (recorded as the calibrations' creator, "
+                        "who may then neither review nor approve them; default $GONIO_USER), "
+                        "with their password in $GONIO_PASSWORD or asked on the terminal. "
+                        "A calibration imported without one cannot be reviewed")
+    add_attach_options(q)
+    q.set_defaults(func=run_import)
+
+
 def hook_calibrate(sub) -> None:
     """Add ``--record`` (with ``--database``/``--data``) to ``gonio calibrate``."""
     import argparse
@@ -158,30 +171,45 @@ def hook_calibrate(sub) -> None:
         if attach_of(args) and not args.record:
             raise GonioError("--standard, --temperature, --humidity and "
                              "--environment-from-readings go with --record", key="--record")
+        if not args.record:
+            return inner(args)
+        from gonio.records import services
+        from gonio.records.importer import (attach_recorded, check_attach_actor,
+                                            import_output_folder)
         actor = None
-        if args.record:              # the registered instrument's type, for K's bound
-            args.registered_gyro_type = registered_gyro_type(args)
-            if args.record_user or os.environ.get("GONIO_USER"):   # logged in before the run
-                store = _store(args)
-                try:
-                    actor = importing_user(store, args.record_user, "calibrate --record")
-                finally:
-                    store.close()
-        rc = inner(args)
-        if rc == 0 and args.record:
-            from gonio.records import services
-            from gonio.records.importer import record_output_folder
+        args.registered_gyro_type = registered_gyro_type(args)   # for K's bound
+        if args.record_user or os.environ.get("GONIO_USER"):   # logged in before the run
             store = _store(args)
             try:
-                cid = record_output_folder(store, args.out, readings=args.readings,
-                                           spec_key=args.spec,
-                                           protocol=getattr(args, "protocol", None),
-                                           lab=getattr(args, "lab", None),
-                                           table_calibration=getattr(
-                                               args, "table_calibration", None),
-                                           actor=actor, registered_gyro_type=getattr(
-                                               args, "registered_gyro_type", None),
-                                           **attach_of(args))
+                actor = importing_user(store, args.record_user, "calibrate --record")
+            finally:
+                store.close()
+        check_attach_actor(actor, **attach_of(args))               # refused before the work
+        check_readings_unrecorded(args)
+        recorded = []
+
+        def record(stage) -> None:
+            """The finished set, recorded before it is moved into --out: a set the records
+            refuse is never written (the GonioError is the command's one line, exit 2)."""
+            store = _store(args)
+            try:
+                recorded.append(import_output_folder(
+                    store, stage, shown=args.out, readings=args.readings, spec_key=args.spec,
+                    protocol=getattr(args, "protocol", None), lab=getattr(args, "lab", None),
+                    table_calibration=getattr(args, "table_calibration", None), actor=actor,
+                    registered_gyro_type=getattr(args, "registered_gyro_type", None),
+                    option_files={d: getattr(args, d) for d in args.spec_inputs
+                                  if d != "table_calibration" and getattr(args, d, None)}))
+            finally:
+                store.close()
+
+        args.before_swap = record
+        rc = inner(args)
+        if rc == 0 and recorded:
+            store = _store(args)
+            try:
+                cid = recorded[0]
+                attach_recorded(store, cid, actor, **attach_of(args))
                 line = attach_line(store, services.calibration(store, cid))
             finally:
                 store.close()
@@ -191,6 +219,44 @@ def hook_calibrate(sub) -> None:
         return rc
 
     p.set_defaults(func=run_recorded)
+
+
+def _records_exist(args) -> bool:
+    """Whether ``calibrate --record``'s records may hold anything yet: a database URL is
+    given, or the SQLite records file exists (nothing is created before the run)."""
+    from pathlib import Path
+
+    from gonio.records.db import DEFAULT_DATA
+
+    if args.database:
+        return True
+    folder = Path(os.path.expanduser(str(args.data or os.environ.get("GONIO_DATA")
+                                          or DEFAULT_DATA)))
+    return (folder / "records.sqlite3").is_file()
+
+
+def check_readings_unrecorded(args) -> None:
+    """``calibrate --record``: readings another calibration that stands already holds are
+    refused before the work (:func:`gonio.records.services.check_readings_unused`, one line
+    naming that calibration; the import checks it again when it records). Nothing when the
+    records do not exist yet or the readings are no file (the calibration says why)."""
+    from pathlib import Path
+
+    from gonio.atomic import sha256_file
+    from gonio.records import services
+
+    if not _records_exist(args) or not Path(args.readings).is_file():
+        return
+    sha = sha256_file(args.readings)
+    store = _store(args)
+    try:
+        with store.session() as s:
+            try:
+                services.check_readings_unused(s, sha)
+            except GonioError as exc:
+                raise GonioError(exc.message, file=args.readings, key=exc.key) from None
+    finally:
+        store.close()
 
 
 def registered_gyro_type(args) -> str | None:
@@ -203,14 +269,10 @@ def registered_gyro_type(args) -> str | None:
     from pathlib import Path
 
     from gonio.formats.provenance import readings_metadata
-    from gonio.records.db import DEFAULT_DATA
     from gonio.records.importer import registered_instrument
 
-    if not args.database:
-        folder = Path(os.path.expanduser(str(args.data or os.environ.get("GONIO_DATA")
-                                              or DEFAULT_DATA)))
-        if not (folder / "records.sqlite3").is_file():
-            return None
+    if not _records_exist(args):
+        return None
     try:
         if not Path(args.readings).is_file():
             return None
@@ -484,16 +546,36 @@ def run_import(args) -> int:
         if args.table_calibration and len(args.folders) > 1:
             raise GonioError("give --table-calibration with one folder only",
                              key="--table-calibration")
+        if args.option_file and len(args.folders) > 1:
+            raise GonioError("give --option-file with one folder only", key="--option-file")
         for folder in args.folders:
             cid = record_output_folder(store, folder, customer=args.customer,
                                        protocol=args.protocol, lab=args.lab, actor=actor,
                                        readings=args.readings,
                                        table_calibration=args.table_calibration,
+                                       option_files=option_files_of(args.option_file),
                                        **attach_of(args))
             print(f"{folder}: {attach_line(store, services.calibration(store, cid))}")
     finally:
         store.close()
     return 0
+
+
+def option_files_of(given: list[str]) -> dict:
+    """``--option-file OPTION=FILE`` values as {option: FILE} (``tilt-estimate`` and
+    ``tilt_estimate`` alike); a value without ``=``, or an option given twice, is refused in
+    one line."""
+    out: dict = {}
+    for v in given:
+        option, sep, path = str(v).partition("=")
+        option = option.strip().lstrip("-").replace("-", "_")
+        if not sep or not option or not path:
+            raise GonioError(f"expected OPTION=FILE (e.g. tilt=tilt.json), got {v[:80]!r}",
+                             key="--option-file")
+        if option in out:
+            raise GonioError(f"{option} given twice", key="--option-file")
+        out[option] = path
+    return out
 
 
 def run_backup(args) -> int:

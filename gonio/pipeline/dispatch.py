@@ -173,7 +173,8 @@ def mark_provenance(result, readings) -> None:
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
-              record: dict | None = None, lab_file: str | Path | None = None, **options):
+              record: dict | None = None, lab_file: str | Path | None = None,
+              before_swap=None, **options):
     """Calibrate a readings file with its specification (``spec_key`` or the file's
     ``# spec:``): results.json, summary.txt, tables and the certificate (HTML, PDF; with
     ``dcc`` the DCC XML) in ``out``, written as one set. ``record``: the records' registered
@@ -182,7 +183,9 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     ``lab_file``: the laboratory file's path where ``lab`` is its dict (the folder its
     ``[table_calibration] file`` is named from: a specification that takes a table calibration
     gets the file :func:`gonio.pipeline.equipment.lab_table_calibration` checked, before the
-    work). Returns (result, paths)."""
+    work). ``before_swap(stage)``: called with the finished set before it replaces ``out``
+    (:func:`gonio.atomic.output_set`; ``calibrate --record`` records it there, so a set the
+    records refuse is never written). Returns (result, paths)."""
     spec = spec_of(spec_key, readings)
     opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
                           spec.calibrate_options, "calibrate")
@@ -211,7 +214,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None),
-                    extra=manifest_record(spec, readings, opts, inputs, monte_carlo_trials)):
+                    extra=manifest_record(spec, readings, opts, inputs, monte_carlo_trials),
+                    before_swap=before_swap):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
     return result, paths
 

@@ -389,18 +389,11 @@ def recorded_options(man: dict, spec, res_path: Path) -> dict:
     """The options the folder's calibration was computed with, as its manifest records them
     (``calibrate_options``; {} where it records none: the default options), each one
     :data:`RECOMPUTED_OPTIONS` takes and the specification takes, with a plain value (the
-    Monte Carlo trials within ``GONIO_MAX_MONTE_CARLO``). A result computed with an option
-    file other than the table calibration (``--tilt FILE``, ``--thermal FILE``: the
-    manifest's ``option_files``) cannot be computed again from what the records keep, and is
-    refused in one line, as is an option not known here: nothing recorded."""
+    Monte Carlo trials within ``GONIO_MAX_MONTE_CARLO``). An option not known here is
+    refused in one line: nothing recorded. The options that named a file (the manifest's
+    ``option_files``: ``--tilt FILE``, ``--thermal FILE``) are :func:`option_inputs`'."""
     from gonio.limits import check
     from gonio.pipeline.dispatch import COMMON_CALIBRATE
-    files = sorted(k for k in (man.get("option_files") or {}) if k != "table_calibration")
-    if files:
-        raise GonioError(f"results.json was computed with --{files[0].replace('_', '-')} FILE, "
-                         "an input the records do not keep: it cannot be computed again on "
-                         "import; calibrate the readings without it (or through the records) "
-                         "and import that folder", file=res_path, key=files[0])
     opts = man.get("calibrate_options") or {}
     if not isinstance(opts, dict):
         raise GonioError("the manifest's calibrate_options is not a JSON object",
@@ -423,6 +416,61 @@ def recorded_options(man: dict, spec, res_path: Path) -> dict:
     if "monte_carlo_trials" in out:
         check("GONIO_MAX_MONTE_CARLO", out["monte_carlo_trials"], "calibrate_options."
               "monte_carlo_trials", unit="trials")
+    return out
+
+
+def option_inputs(spec, man: dict, res_path: Path, rd: Path,
+                  given: dict | None = None) -> list[tuple[str, str, Path]]:
+    """The files the folder's calibration was given by an option (the manifest's
+    ``option_files`` but the table calibration, :func:`_table_calibration`'s: ``--tilt FILE``,
+    ``--thermal FILE``), as (option, the file name the run read it under, path), so that the
+    records keep each with the calibration and its recomputation reads the same bytes under
+    the same name. Each is ``given[option]`` (``calibrate --record``'s own, ``gonio db import
+    --option-file OPTION=FILE``), else a file of that name in the folder, else beside the
+    readings ``rd``; its SHA-256 must be the manifest's. An option the specification does not
+    take, a file not found or one with other bytes is refused in one line naming it: nothing
+    recorded."""
+    files = man.get("option_files") or {}
+    if not isinstance(files, dict):
+        raise GonioError("the manifest's option_files is not a JSON object",
+                         file=res_path.parent / "gonio-manifest.json", key="option_files")
+    given = {k: v for k, v in (given or {}).items() if v}
+    out = []
+    for option, rec in sorted(files.items()):
+        if option == "table_calibration":
+            continue
+        flag = f"--{str(option)[:40].replace('_', '-')}"
+        name = str(rec.get("file") or "") if isinstance(rec, dict) else ""
+        want = str(rec.get("sha256") or "") if isinstance(rec, dict) else ""
+        if option not in spec.calibrate_options or option in RECOMPUTED_OPTIONS or \
+                option in ("protocol", "dcc") or name != Path(name).name or \
+                name in ("", ".", ".."):
+            raise GonioError(f"the manifest records {flag} {name[:80]!r}, which a "
+                             f"calibration by {spec.key} cannot be computed again with",
+                             file=res_path.parent / "gonio-manifest.json", key="option_files")
+        if len(services.option_file_name(option, name)) > 64:
+            raise GonioError(f"{flag} {name[:80]!r}: a file name longer than "
+                             f"{64 - len(services.option_file_name(option, ''))} characters; "
+                             "rename it and calibrate again", file=res_path, key=option)
+        path = Path(given[option]) if option in given else next(
+            (p for p in (res_path.parent / name, rd.parent / name) if p.is_file()), None)
+        if path is None or not path.is_file():
+            raise GonioError(f"results.json was computed with {flag} {name} (SHA-256 "
+                             f"{want[:16]}…), which is not here: the records keep every file "
+                             f"the calibration read; give it with --option-file "
+                             f"{option}=FILE (or put it beside the readings)", file=res_path,
+                             key=option)
+        got = blobs_sha(path)
+        if got != want:
+            raise GonioError(f"{path.name} has SHA-256 {got[:16]}…, not the {want[:16]}… the "
+                             f"run read as {flag} {name}: not the file results.json was "
+                             "computed with", file=path, key=option)
+        out.append((str(option), name, path))
+    unused = sorted(set(given) - {o for o, _, _ in out} - {"table_calibration"})
+    if unused:
+        raise GonioError(f"--option-file {unused[0]}=…: results.json was computed without "
+                         f"--{unused[0].replace('_', '-')} FILE; leave it out", file=res_path,
+                         key=unused[0])
     return out
 
 
@@ -466,13 +514,16 @@ def named_inputs(spec, rd: Path, man: dict, res_path: Path) -> list[tuple[str, P
 
 def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str | None,
                lab, tsha: str | None, tname: str, gyro_type: str | None, work: Path,
-               inputs: list[tuple[str, str]] = (), options: dict | None = None) -> Path:
+               inputs: list[tuple[str, str]] = (), options: dict | None = None,
+               option_files: list[tuple[str, str, str]] = ()) -> Path:
     """The folder's result computed again into ``work``/out (returned) from the stored
     readings (blob ``rsha``, under the name ``rd_name`` the run read it by) and the files
     they name (``inputs``: (name, blob), written beside them under those names), protocol
     (the built-in name, else the stored file under its name), laboratory file and table
     calibration (blob ``tsha`` under the name ``tname`` the run recorded), with the
-    ``options`` the folder's manifest records (:func:`recorded_options`) and the registered
+    ``options`` the folder's manifest records (:func:`recorded_options`), the files options
+    named (``option_files``: (option, name, blob), each written under the name the run read it
+    by, :func:`option_inputs`) and the registered
     instrument's ``gyro_type`` where the run had it (``gonio calibrate --record``) and
     neither those options nor the laboratory file state one, through the records' one call
     of the pipeline (:func:`gonio.records.compute.calibrate_folder`)."""
@@ -504,6 +555,11 @@ def recomputed(store, spec_key: str, rd_name: str, rsha: str, proto, psha: str |
     spec = get(spec_key)
     lab_d = load_lab_file(lab, spec) if lab is not None else None
     options = dict(options or {})
+    for option, name, sha in option_files:         # --tilt FILE, --thermal FILE, stored
+        target = work / "option" / option / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(blobs.get_bytes(store.blob_root, sha))
+        options[option] = str(target)
     if gyro_type and not ((lab_d or {}).get("instrument") or {}).get("gyro_type"):
         options.setdefault("gyro_type", gyro_type)     # calibrate --record's registered type
     with naming_lab_file(lab):
@@ -547,10 +603,19 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                          protocol: str | Path | None = None,
                          lab: str | Path | None = None,
                          table_calibration: str | Path | None = None,
-                         registered_gyro_type: str | None = None) -> int:
+                         registered_gyro_type: str | None = None,
+                         shown: str | Path | None = None,
+                         option_files: dict | None = None) -> int:
     """Import one output folder as a computed calibration; returns its id.
     ``registered_gyro_type``: the registered instrument's optical-gyro type the run was given
-    (``gonio calibrate --record``), which its recomputation is given too.
+    (``gonio calibrate --record``), which its recomputation is given too. ``shown``: the
+    folder as the records name it (``calibrate --record`` imports its set from the staging
+    folder, before it is moved into ``--out``: that name); default ``folder``.
+    ``option_files``: {option: path} of the files the run was given by an option (``--tilt
+    FILE``, ``--thermal FILE``), else found in the folder or beside the readings
+    (:func:`option_inputs`): each stored with the calibration under
+    :data:`~gonio.records.services.OPTION_PREFIX` and read by the recomputation. Readings
+    another calibration that stands holds are refused before the (costly) recomputation.
 
     The folder's files are checked against its manifest (:func:`check_manifest`) and the
     result is computed again from what is stored (:func:`recomputed`): the imported
@@ -615,6 +680,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     with store.session() as s:
         inst = registered_instrument(s, meta)
         record = {"gyro_type": inst.gyro_type} if inst is not None and inst.gyro_type else None
+        try:                       # one measurement, one calibration: before the work
+            services.check_readings_unused(s, str(source.get("sha256", "")))
+        except GonioError as exc:
+            raise GonioError(exc.message, file=rd, key=exc.key) from None
     _check_identity(rd, lab, key, results, record, res_path)
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
@@ -628,12 +697,19 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     options = recorded_options(man, get(key), res_path)
     inputs = [(name, *blobs.put_file(store.blob_root, p))
               for name, p in named_inputs(get(key), rd, man, res_path)]
+    by_option = [(option, name, *blobs.put_file(store.blob_root, p))
+                 for option, name, p in option_inputs(get(key), man, res_path, rd,
+                                                      option_files)]
     with tempfile.TemporaryDirectory(prefix="gonio-import-") as tmp:
         again = recomputed(store, key, rd.name, rsha, proto, psha, lab, tsha, tname,
                            registered_gyro_type, Path(tmp),
-                           [(n, sha) for n, sha, _ in inputs], options)
+                           [(n, sha) for n, sha, _ in inputs], options,
+                           [(o, n, sha) for o, n, sha, _ in by_option])
+        inputs = [(services.INPUT_PREFIX + n, sha, size) for n, sha, size in inputs] + \
+            [(services.option_file_name(o, n), sha, size) for o, n, sha, size in by_option]
         check_recomputed(results, again, res_path)
-        return _record_import(store, folder, again, actor, meta, key, customer, day, rd,
+        return _record_import(store, Path(shown or folder), again, actor, meta, key, customer,
+                              day, rd,
                               rsha, rsize, proto, psha, psize if psha else 0, lab, lsha, lsize,
                               env, lab_stds, tsha, tsize, tname, res_path, inputs, options)
 
@@ -641,9 +717,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
 def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,
                    proto, psha, psize, lab, lsha, lsize, env, lab_stds, tsha, tsize, tname,
                    res_path, inputs=(), options=None) -> int:
-    """The checked import recorded: the calibration, its standards, files (the files the
-    readings name, ``inputs``: (name, sha256, size), kept under
-    :data:`~gonio.records.services.INPUT_PREFIX`) and audit events (the ``options`` it was
+    """The checked import recorded: the calibration, its standards, files (``inputs``: (name
+    kept under, sha256, size): the files the readings name, under
+    :data:`~gonio.records.services.INPUT_PREFIX`, and the files options named, under
+    :data:`~gonio.records.services.OPTION_PREFIX`) and audit events (the ``options`` it was
     computed with named) in one transaction, then its result (the recomputed folder
     ``again``'s files) stored."""
     try:
@@ -685,9 +762,8 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
                             standards=services.standard_names(s, cal.id),
                             options=dict(options or {}),
                             inputs={n: sha for n, sha, _ in inputs}))
-        for name, sha, _ in inputs:          # the files the readings name, kept with them
-            s.add(CalibrationFile(calibration_id=cal.id, name=services.INPUT_PREFIX + name,
-                                  sha256=sha))
+        for name, sha, _ in inputs:     # the files the readings and the options name, kept
+            s.add(CalibrationFile(calibration_id=cal.id, name=name, sha256=sha))
         if tsha is not None:        # the table calibration the run used, kept
             _keep_table_calibration(s, cal, actor, tsha, tname, res_path)
         s.commit()
@@ -721,16 +797,41 @@ def record_output_folder(store, folder: str | Path, *, actor: User | None = None
     (:func:`gonio.records.worker.run_now`: nothing computed again) — also when only the
     laboratory file names standards. Attaching needs ``actor``; the import is kept when an
     attach is refused (the GonioError names the calibration)."""
+    attach = dict(standard_identifiers=standard_identifiers, temperature_c=temperature_c,
+                  humidity_pct=humidity_pct,
+                  environment_from_readings=environment_from_readings)
+    check_attach_actor(actor, **attach)
+    cid = import_output_folder(store, folder, actor=actor, **import_options)
+    attach_recorded(store, cid, actor, **attach)
+    return cid
+
+
+def _attach_given(standard_identifiers=(), temperature_c=None, humidity_pct=None,
+                  environment_from_readings: bool = False) -> tuple[list, dict]:
     environment = {}
     if temperature_c is not None or humidity_pct is not None:
         environment = {"temperature_c": temperature_c, "humidity_pct": humidity_pct}
     if environment_from_readings:
         environment["environment_from_readings"] = True
-    standards = list(standard_identifiers or ())
+    return list(standard_identifiers or ()), environment
+
+
+def check_attach_actor(actor: User | None, **attach) -> None:
+    """Attaching standards or the environment (``attach``: :func:`record_output_folder`'s
+    keywords) needs the records user ``actor``: refused in one line before any work."""
+    standards, environment = _attach_given(**attach)
     if (standards or environment) and actor is None:
         raise GonioError("give the records user attaching standards or the environment "
                          "(--user or --record-user, or $GONIO_USER)", key="user")
-    cid = import_output_folder(store, folder, actor=actor, **import_options)
+
+
+def attach_recorded(store, cid: int, actor: User | None, **attach) -> None:
+    """The second half of :func:`record_output_folder`: the registered standards (the
+    laboratory file's matched at import, and those ``attach`` names) and the environment
+    given attached to the recorded calibration ``cid`` by ``actor``, and its draft rendered
+    at once; the import is kept when an attach is refused (the GonioError names the
+    calibration)."""
+    standards, environment = _attach_given(**attach)
     with store.session() as s:
         from_lab = services.standard_names(s, cid)      # the lab file's, matched at import
     if standards or environment or (from_lab and actor is not None):
@@ -743,4 +844,3 @@ def record_output_folder(store, folder: str | Path, *, actor: User | None = None
                              key=exc.key) from None
         from gonio.records.worker import run_now
         run_now(store, cid)
-    return cid

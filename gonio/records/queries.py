@@ -106,8 +106,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
     choose from)."""
     from gonio.errors import GonioError
-    from gonio.records.services import (INPUT_PREFIX, TABLE_CALIBRATION, calibration, seal,
-                                        settings, table_calibration_name)
+    from gonio.records.services import (INPUT_PREFIX, OPTION_PREFIX, TABLE_CALIBRATION,
+                                        calibration, seal, settings, table_calibration_name)
     from gonio.report.i18n import minus_sign
 
     try:
@@ -119,8 +119,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
                           .order_by(ResultItem.id)).all()
         rows = s.scalars(select(CalibrationFile).where(
             CalibrationFile.calibration_id == cal_id).order_by(CalibrationFile.name)).all()
-        files = [f.name for f in rows            # the readings' own input files: not a page's
-                 if not f.name.startswith(INPUT_PREFIX)]
+        files = [f.name for f in rows            # the run's input files: not a page's
+                 if not f.name.startswith((INPUT_PREFIX, OPTION_PREFIX))]
         table_sha = next((f.sha256 for f in rows if f.name == TABLE_CALIBRATION), None)
         table_name = table_calibration_name(s, cal_id) if table_sha else ""
         entry = s.scalar(select(TableCalibration).options(

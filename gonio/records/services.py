@@ -715,6 +715,44 @@ TABLE_CALIBRATION = "table_calibration.csv"
 INPUT_PREFIX = "input/"
 
 
+#: The prefix of the names a calibration's option files are kept under among its files: each
+#: file the run was given by an option of its specification (``--tilt FILE``, ``--thermal
+#: FILE``), ``option/OPTION/`` + the file name the run read it under (stored at import; sealed
+#: with the run's files; the manifest's ``option_files`` records its SHA-256): a result is
+#: computed again from what is stored.
+OPTION_PREFIX = "option/"
+
+
+def option_file_name(option: str, name: str) -> str:
+    """The name an option's file ``name`` is kept under among a calibration's files.
+
+    >>> option_file_name("tilt", "tilt.json")
+    'option/tilt/tilt.json'
+    """
+    return f"{OPTION_PREFIX}{option}/{name}"
+
+
+def write_option_files(store, cal_id: int, folder: Path) -> dict:
+    """The calibration's stored option files (:data:`OPTION_PREFIX`, each checked against its
+    digest) written into ``folder``/option/OPTION/ under the names the run read them by:
+    {option: path}, the options its run is given ({} where none)."""
+    with store.session() as s:
+        rows = s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
+            CalibrationFile.calibration_id == int(cal_id),
+            CalibrationFile.name.startswith(OPTION_PREFIX))).all()
+    out = {}
+    for name, sha in sorted(rows):
+        option, _, base = name[len(OPTION_PREFIX):].partition("/")
+        if not option or not base or base != Path(base).name or base in (".", ".."):
+            raise GonioError(f"the stored option file {name!r} is not option/OPTION/NAME",
+                             key=f"calibration {cal_id}")
+        target = Path(folder) / "option" / option / base
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(file_bytes(store, sha))
+        out[option] = target
+    return out
+
+
 def write_inputs(store, cal_id: int, folder: Path) -> list[str]:
     """The calibration's stored input files (:data:`INPUT_PREFIX`, each checked against its
     digest) written into ``folder`` under the names its readings give them, for a run of the

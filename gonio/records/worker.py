@@ -75,11 +75,14 @@ def _compute(store, cal, work) -> None:
         readings = bench.acquire_for(store, cal, request, work, protocol)
     lab = write_lab_toml(services.lab_details(store, cal.id, final=False), work / "lab.toml")
     table = services.table_calibration_file(store, cal.id, work)
+    by_option = services.write_option_files(store, cal.id, work)   # --tilt FILE, … kept
     services.set_progress(store, cal.id, "computing the items and their uncertainties, "
                                          "rendering the draft certificate")
     try:
         calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol,
-                         lab=lab, **({"table_calibration": table} if table else {}))
+                         lab=lab, **({"table_calibration": table} if table else {}),
+                         **({"options": {k: str(v) for k, v in by_option.items()}}
+                            if by_option else {}))
     except GonioError as exc:          # the stored table calibration named as the records do
         if table is None or exc.file != str(table):
             raise

@@ -371,7 +371,9 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
         "gonio: recorded as calibration 2: standards RT-07; environment 20 °C, 44 %\n")
     assert main(run + ["--out", str(tmp_path / "c"), "--standard", "RT-07"]) == 2
     assert "go with --record" in capsys.readouterr().err
-    # a laboratory file naming a standard not registered: one line, nothing recorded
+    # a laboratory file naming a standard not registered, for readings calibration 2 holds:
+    # one line, nothing recorded, no --out; the readings held are refused first, before the
+    # work (the standard alone: test_records_record_refused.py)
     other = tmp_path / "lab-other.toml"
     other.write_text(lab.read_text("utf-8").replace('identifier = "RT-07"',
                                                     'identifier = "AC-99"'), "utf-8")
@@ -379,7 +381,8 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
     assert main(run + ["--out", str(tmp_path / "d"), "--record"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("gonio: error: ") and err.count("\n") == 1, err
-    assert "[[standards]] 1: 'AC-99' is not a registered standard" in err, err
+    assert "already those of calibration 2 (RLG-0001, " in err, err
+    assert not (tmp_path / "d").exists()
     st = open_store(None, data)
     try:
         one, two = services.calibration(st, 1), services.calibration(st, 2)

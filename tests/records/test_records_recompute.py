@@ -198,8 +198,8 @@ def test_the_options_a_folder_was_computed_with_are_the_recomputations(tmp_path,
              "the manifest records the option 'seed' = 7, which a calibration cannot be "
              "computed again with"),
             (lambda m: m.update(option_files={"thermal": {"file": "t.csv", "sha256": "0"}}),
-             "results.json was computed with --thermal FILE, an input the records do not "
-             "keep")):
+             "results.json was computed with --thermal t.csv (SHA-256 0…), which is not "
+             "here")):
         shutil.copy(folder / "gonio-manifest.json", tmp_path / "man.json")
         rewrite_manifest(folder, change)
         assert main(args) == 2

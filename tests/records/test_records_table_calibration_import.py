@@ -289,7 +289,8 @@ def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, 
                                         refused_until_registered):
     """``gonio calibrate --table-calibration FILE --lab LAB --record``, the table ticked (the
     laboratory file's [[standards]]): while the register does not hold the file, exit 2, one
-    line naming the register command, nothing recorded; once registered, the calibration
+    line naming the register command, nothing recorded and no output folder written (no
+    certificate of a refused calibration); once registered, the calibration
     recorded keeps the file the run used (hashlib digest) under the user's name, the
     registered entry, and seals."""
     from gonio.cli import main
@@ -307,6 +308,7 @@ def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch, 
                      "--out", str(tmp_path / out), "--record", "--data", str(data)])
 
     entry = refused_until_registered(lambda: record("run0"), data)
+    assert not (tmp_path / "run0").exists()      # refused by the records: no certificate left
     assert record("run") == 0
     st = open_store(None, data)
     try:
