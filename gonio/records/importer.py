@@ -685,11 +685,6 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         except GonioError as exc:
             raise GonioError(exc.message, file=rd, key=exc.key) from None
     _check_identity(rd, lab, key, results, record, res_path)
-    with store.session() as s:     # named before the (costly) recomputation; the check that
-        try:                       # decides is the one in the transaction that records them
-            services.check_readings_unused(s, blobs_sha(rd))
-        except GonioError as exc:
-            raise GonioError(exc.message, file=rd, key=exc.key) from None
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
     psha = None
