@@ -2016,7 +2016,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                     t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
                     tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
                     tilt_measured=_measured_round_tilt(results, readings, protocol, tc),
-                    **_round_noise(results, readings, protocol)),
+                    stop_deg=stop, zero_deg=zero, **_round_noise(results, readings, protocol)),
                 beside=draft)
     zs = results.zero_stability
     if zs.measured:

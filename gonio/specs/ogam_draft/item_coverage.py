@@ -371,7 +371,10 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             if rs and all(r.get("max_interval") for r in rs):
                 item["max_interval"] = max_interval_coverage(
                     np.abs(vals), np.array([r["max_interval"] for r in rs], dtype=float),
-                    np.abs(tp).max(axis=1), own)
+                    np.abs(tp).max(axis=1), own,
+                    points=[r["points"] for r in rs] if all("u_c_points" in r for r in rs)
+                    else None,
+                    u_points=[r.get("u_c_points") for r in rs])
         elif name == "repeatability":
             s2 = np.array([r["s_points"] for r in rs]) ** 2
             truth = float(np.sqrt(s2.mean(axis=0)).max())
@@ -423,13 +426,22 @@ def item_coverage(records: list[dict], intrinsic_points=None,
     return out
 
 
-def max_interval_coverage(m, iv, theta, own: bool = True) -> dict:
+def max_interval_coverage(m, iv, theta, own: bool = True, points=None, u_points=None) -> dict:
     """Coverage of E's extreme by its interval (:func:`uncertainty.extreme.max_abs_interval`)
     over the trials: ``m`` = max|E_i|, ``iv`` the [lower, upper] per trial, ``theta`` the
     truth's max|E_i|. The interval holding θ is the coverage (with its Clopper–Pearson
     interval); z scales each side to a standard normal one, z = (m − θ)/((upper − m)/1.96)
     where θ lies above m, (m − θ)/((m − lower)/1.96) below (an interval exact at its
     worst pattern has z sd ≈ 1 there; an every-pattern interval is wider elsewhere).
+
+    That z scales each side by its half-width over 1.96, as if the interval were ± 1.96 sd of
+    a normal estimate; it is not (its factors are c_H = 1.666 above and the Šidák c_L = 2.858
+    below at twelve points), so with ``points`` (the E_i, per trial) and ``u_points`` (their
+    u_c) the statement's own z is given beside it, ``z_level``
+    (:func:`uncertainty.extreme.max_abs_level_z`: the level at which the interval's own family
+    just holds θ, as a normal quantile, signed; root mean square 1 at each side's worst pattern,
+    less elsewhere), and the misses on each side, ``miss_above`` (θ above the upper end) and
+    ``miss_below`` (θ below the lower end), each with its Clopper–Pearson interval.
 
     >>> r = max_interval_coverage([1.0, 1.0], [[0.5, 1.4], [0.8, 1.2]], [1.1, 0.7])
     >>> r["hits"], round(r["z_mean"], 3)
@@ -446,6 +458,18 @@ def max_interval_coverage(m, iv, theta, own: bool = True) -> dict:
     out.update(z_mean=float(np.mean(z[ok])) if ok.any() else None, z_sd=z_sd,
                flags=coverage_flags(out["coverage"], z_sd, own),
                mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
+    n = int(m.size)
+    for key, miss in (("miss_above", theta > iv[:, 1]), ("miss_below", theta < iv[:, 0])):
+        k = int(miss.sum())
+        out[key] = {"n": k, "fraction": k / n if n else None,
+                    "clopper_pearson": list(clopper_pearson(k, n))}
+    if points is not None and u_points is not None:
+        from uncertainty.extreme import max_abs_level_z
+
+        zl = np.array([max_abs_level_z(x, u, t) for x, u, t in zip(points, u_points, theta)])
+        out["z_level"] = {"mean": float(zl.mean()),
+                          "sd": float(zl.std(ddof=1)) if zl.size > 1 else None,
+                          "rms": float(np.sqrt(np.mean(zl * zl)))}
     return out
 
 
@@ -485,7 +509,8 @@ def _chi_square_spread(item: dict, rs: list, vals, truth) -> None:
         z = chi_square_z(vals, truth, [r["nu"] for r in rs])
         z = z[np.isfinite(z)]
         if z.size > 1:
-            item["z_chi2"] = {"mean": float(z.mean()), "sd": float(z.std(ddof=1))}
+            item["z_chi2"] = {"mean": float(z.mean()), "sd": float(z.std(ddof=1)),
+                              "rms": float(np.sqrt(np.mean(z * z)))}
 
 
 def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:

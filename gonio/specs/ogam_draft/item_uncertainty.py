@@ -1217,9 +1217,10 @@ def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
     return RangeTableOrder(order, 0.5 * float(table_mpe_arcsec) * float(diam[order - 1]))
 
 
-#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the stated one (the standard's
-#: value, u from both readings), the standard's alone (independent stops) and the physical one
-#: alone (one periodic error at the bound).
+#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the stated one (each position
+#: the 7.1 rounds reach rectangular ±MPE, independent, the common zero shared: K's model), the
+#: standard's per stop (each stop's turn independent, the zero inside it) and the physical one
+#: (one periodic error at the bound), the last two kept for comparison.
 TABLE_READINGS = ("stated", "standard", "periodic")
 
 #: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
@@ -1228,21 +1229,64 @@ RANGE_DRAWS = 4000
 RANGE_SEED = 20261129
 
 
-def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int):
-    """Draws of the rounds' table errors of K_i (counts/°) in K_l's two readings
-    (:func:`nonlinearity_corrected_budget`, A.4.1 applied to 7.1): the standard's,
-    independent rectangular ±MPE per stop (from ``rng``), and one periodic error at the bound
-    of the worst order (:func:`nonlinearity_table_order`), K_i·MPE·(sin(hθ_i + φ) − sin φ)/θ_i
-    with φ uniform per draw (its own generator, so that the standard's draws from ``rng`` stay
-    as they were); and that order."""
+def range_table_positions(theta_deg, stop_deg=None, zero_deg=None):
+    """The distinct table positions the 7.1 rounds reach (° mod 360, rounded to 1e-6°) and the
+    (n, P) matrix that turns their errors into the rounds' turned-angle errors: round i turns
+    from its zero z_i to its stop s_i = z_i + θ_i with the error e(s_i) − e(z_i) (A.4.1
+    applied to 7.1), so its row holds +1 at s_i and −1 at z_i; a position reached by several
+    rounds is one column (one error), and a stop at the zero's own position (the 360° stop of
+    a round zeroed at 0°) cancels. The positions and rule of K's table lines
+    (:func:`scale_factor_table_coefficients`, whose coefficients are this matrix's rows over
+    nθ_i) and of E's.
+
+    >>> pos, m = range_table_positions([60, 120, 360])
+    >>> pos, m.tolist()
+    ([0.0, 60.0, 120.0], [[-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
+    """
+    th = np.asarray(theta_deg, dtype=float)
+    stop = th if stop_deg is None else np.asarray(stop_deg, dtype=float)
+    zero = np.zeros_like(th) if zero_deg is None else np.asarray(zero_deg, dtype=float)
+
+    def key(x: float) -> float:
+        k = round(float(x) % 360.0, 6)
+        return 0.0 if k == 360.0 else k
+
+    pos = sorted({key(x) for x in np.concatenate([stop, zero])})
+    col = {p: j for j, p in enumerate(pos)}
+    m = np.zeros((th.size, len(pos)))
+    for i, (s_, z_) in enumerate(zip(stop, zero)):
+        m[i, col[key(s_)]] += 1.0
+        m[i, col[key(z_)]] -= 1.0
+    return pos, m
+
+
+def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int,
+                        reading: str = "stated", stop_deg=None, zero_deg=None):
+    """Draws of the rounds' table errors of K_i (counts/°) in one of K_l's readings
+    (:func:`nonlinearity_corrected_budget`, A.4.1 applied to 7.1), and the worst order of one
+    periodic error (:func:`nonlinearity_table_order`):
+
+    - ``stated``: the error at every position the rounds reach rectangular ±MPE (JCGM 100
+      4.3.7), independent of the other positions', round i moved by
+      K_i·(e(s_i) − e(z_i))/θ_i (:func:`range_table_positions`: the common zero shared by every
+      round, the 360° stop cancelling) — K's table lines (:func:`scale_factor_table_u_rel`);
+    - ``standard``: each stop's turn independent, rectangular ±MPE (u_tab per round);
+    - ``periodic``: one periodic error at the bound of the worst order,
+      K_i·MPE·(sin(hθ_i + φ) − sin φ)/θ_i, φ uniform per draw (its own generator).
+
+    The first two draw from ``rng``."""
     n = k_i.size
-    tab = rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
     worst = nonlinearity_table_order(th, table_mpe_arcsec)
-    phi = np.random.default_rng(RANGE_SEED + 1).uniform(0.0, 2.0 * math.pi, (draws, 1))
-    x = np.radians(th)
-    periodic = (float(table_mpe_arcsec) * (np.sin(worst.order * x + phi) - np.sin(phi))
-                / (th * ARCSEC_PER_DEG) * k_i)
-    return tab, periodic, worst
+    if reading == "standard":
+        return rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0)), worst
+    if reading == "periodic":
+        phi = np.random.default_rng(RANGE_SEED + 1).uniform(0.0, 2.0 * math.pi, (draws, 1))
+        x = np.radians(th)
+        return (float(table_mpe_arcsec) * (np.sin(worst.order * x + phi) - np.sin(phi))
+                / (th * ARCSEC_PER_DEG) * k_i), worst
+    _, m = range_table_positions(th, stop_deg, zero_deg)
+    e = rng.uniform(-1.0, 1.0, (draws, m.shape[1])) * float(table_mpe_arcsec)
+    return (e @ m.T) / (th * ARCSEC_PER_DEG) * k_i, worst
 
 
 def _round_errors(k_i, th, errs, rng, draws: int, tilt_measured, tilt_round_coupling, noise,
@@ -1283,7 +1327,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   noise: RoundNoise | None = None, time_s=None,
                                   draws: int = RANGE_DRAWS,
                                   tilt_measured=None,
-                                  table_reading: str = "stated") -> ItemUncertainty:
+                                  table_reading: str = "stated", stop_deg=None,
+                                  zero_deg=None) -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
     The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
@@ -1291,70 +1336,64 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     σ spread by d₂(n)·σ on average, Tippett 1925). :func:`nonlinearity_budget` widens U for it
     (the ``K_rng`` line); here the bias is corrected (:func:`uncertainty.stdev.corrected_range`):
     the errors of the K_i are drawn from the measurement model (JCGM 101 5.1, 7.2), each round
-    its table angle error at the stop (rectangular ±MPE, A.4.1, independent stops) and its
-    count quantisation (triangular ±1 count), and — when ``tilt_round_coupling`` gives the
-    rounds' coupling at the A.1 bound ((a_k, b_k), arcsec per degree,
-    :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling`) — the tilt × Earth-rate coupling,
-    the same tilt for every round: relative error (a_k cos α − b_k sin α)/3600 with the
-    azimuth α uniform (the bound at an unknown azimuth, as K's ``K_tilt`` line) — and, when
-    ``noise`` (:func:`round_noise`, from the 7.4 series) and the rounds' times from zeroing
-    to reading ``time_s`` are given, the gyro's own angle noise over each round: its angle
-    random walk, normal with u = N√t_k, independent between rounds, and the measured Earth-rate
-    compensation's rate error, normal with u = N/√T_s, the same for every round, times t_k
-    (relative errors: the angle over θ_k). Where the in-situ tilt estimate measured ψ and
-    its azimuth, ``tilt_measured`` (a :class:`gonio.specs.ogam_draft.budget_extra.MeasuredRoundTilt`)
-    replaces ``tilt_round_coupling``: each K_i is corrected for its own coupling at the
-    measured tilt, K_i/(1 + e_k(ψ, γ)) (JCGM 100 3.2.4), and the draws carry the correction's
-    error e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance
-    (JCGM 101 6.4.8).
+    its table angle error (below) and its count quantisation (triangular ±1 count), and — when
+    ``tilt_round_coupling`` gives the rounds' coupling at the A.1 bound ((a_k, b_k), arcsec per
+    degree, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling`) — the
+    tilt × Earth-rate coupling, the same tilt for every round: relative error
+    (a_k cos α − b_k sin α)/3600 with the azimuth α uniform (the bound at an unknown azimuth,
+    as K's ``K_tilt`` line) — and, when ``noise`` (:func:`round_noise`, from the 7.4 series)
+    and the rounds' times from zeroing to reading ``time_s`` are given, the gyro's own angle
+    noise over each round: its angle random walk, normal with u = N√t_k, independent between
+    rounds, and the measured Earth-rate compensation's rate error, normal with u = N/√T_s, the
+    same for every round, times t_k (relative errors: the angle over θ_k). Where the in-situ
+    tilt estimate measured ψ and its azimuth, ``tilt_measured`` (a
+    :class:`gonio.specs.ogam_draft.budget_extra.MeasuredRoundTilt`) replaces
+    ``tilt_round_coupling``: each K_i is corrected for its own coupling at the measured tilt,
+    K_i/(1 + e_k(ψ, γ)) (JCGM 100 3.2.4), and the draws carry the correction's error
+    e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance (JCGM 101
+    6.4.8).
 
-    The table's errors in two readings, with the same draws of the rest (A.4.1, 7.2;
-    :func:`_range_table_errors`): the standard's reading, each stop independent, rectangular
-    ±MPE, and beside it the physical model, one curve at the bound of the order that spreads
-    the K_i most (:func:`nonlinearity_table_order`), phase drawn, the rounds correlated. In
-    each, K_l is the range whose expected measured range equals the one measured
-    (:func:`uncertainty.stdev.corrected_range`), u the estimator's spread there.
-
-    ``stated`` (the certificate's): the value is the standard's corrected range v_s (in the
-    ordinary case, a table inside its MPE, the periodic correction at the bound would
-    over-correct it); its u is the larger root-mean-square error of v_s about K_l in the two
-    readings: in the standard's u_s; with the table at its bound (a condition the procedure
-    allows), the periodic reading's estimate v_p of K_l has u_p, so v_s errs by
-    (v_s − v_p) + (v_p − K_l), mean square u_p² + (v_s − v_p)² (an uncorrected bias combined
-    in quadrature, JCGM 100 F.2.4.5; Phillips, Eberhardt & Parry, J. Res. NIST 102 (1997)).
-    u_c² = max(u_s², u_p² + (v_s − v_p)²) is stated as lines ``K_rng`` (u_s) and ``K_tab``
-    (√(max(0, u_p² + (v_s − v_p)² − u_s²)), the table at its bound, beyond the draft).
-    ``standard``/``periodic``: each reading alone (docs/draft-readings.md 7.2).
+    The table's errors (A.4.1 applied to 7.1; :func:`_range_table_errors`), stated
+    (``table_reading="stated"``): what the laboratory knows of its table is the MPE, so the
+    error at each position the rounds reach is rectangular ±MPE (JCGM 100 4.3.7), independent
+    from position to position, and round i, zeroed at z_i and stopped at s_i (``zero_deg``,
+    ``stop_deg``; None: zeroed at 0°, stopped at θ_i, the draft's 7.1), moves by
+    (e(s_i) − e(z_i))/θ_i: the common zero's error is shared by every round (correlated, and
+    not cancelling in the range, since it enters as 1/θ_i), the 360° stop is the zero itself
+    (:func:`range_table_positions`). This is K's model (:func:`scale_factor_table_u_rel`), so
+    K and K_l state one state of knowledge of one table. K_l is the range whose expected
+    measured range equals the one measured (:func:`uncertainty.stdev.corrected_range`), u the
+    estimator's spread there, one line ``K_rng``. One periodic error at the bound of the order
+    that spreads the K_i most (:func:`nonlinearity_table_order`) is named in the line's source
+    (the largest range it adds), not stated: a curve at the bound is a worst case, not the
+    laboratory's distribution of its table (as for K; docs/draft-readings.md 7.2).
+    ``standard`` (each stop's turn independent ±MPE, the zero inside it) and ``periodic`` (that
+    curve at the bound, phase drawn) compute each of those readings alone, for comparison.
 
     The statement is one 95 % interval, not value ± k·u (skewed and bounded where the true
     range is a few σ of the errors): the range's confidence belt inverted at the measured
-    range (:func:`uncertainty.stdev.range_belt_interval`), stated the union of both readings';
-    u_c stays the estimator's sd; a value below 0 is stated by the upper end. Beyond the draft.
+    range (:func:`uncertainty.stdev.range_belt_interval`) on the same draws; u_c stays the
+    estimator's sd; a value below 0 is stated by the upper end. Beyond the draft.
 
     Examples
     --------
-    Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the errors alone (±1
-    count over 60°) give 2.38·10⁻⁴ % on average, so K_l = −2.38·10⁻⁴ %, stated by [0, upper]:
+    Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the errors alone (the
+    table per position, ±1 count over 60°) give 2.39·10⁻⁴ % on average, so K_l is negative,
+    stated by [0, upper]:
 
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> round(b.value * 1e4, 2), [round(x * 1e4, 2) for x in b.interval], round(b.u_c * 1e4, 2)
-    (-2.38, [0.0, 2.67], 1.12)
-
-    The periodic reading (order 3: the 60°, 180°, 300° rounds by up to 0.46 ppm) spreads the
-    rounds more; the stated u is then √(u_p² + (v_s − v_p)²) (the ``K_tab`` line):
-
-    >>> s = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="standard")
-    >>> p = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="periodic")
-    >>> round(s.u_c * 1e4, 2), round(p.u_c * 1e4, 2), [c.symbol for c in b.components]
-    (1.08, 1.12, ['K_rng', 'K_tab'])
+    (-2.39, [0.0, 2.64], 1.07)
+    >>> [c.symbol for c in b.components]
+    ['K_rng']
 
     One round 0.5 counts/° above five equal ones: nearly the measured range, wider above:
 
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
-    (0.01389, 0.01377, [134.09, 143.33])
+    (0.01389, 0.01377, [134.25, 143.22])
     """
     from uncertainty.stdev import corrected_range
 
@@ -1363,38 +1402,31 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
     rng = np.random.default_rng(RANGE_SEED)
-    tab, tab_periodic, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws)
+    tab, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws,
+                                     table_reading, stop_deg, zero_deg)
     quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
-    errs = {"standard": (tab + quant) * to_pct, "periodic": (tab_periodic + quant) * to_pct}
-    k_i, errs, src = _round_errors(k_i, th, errs, rng, draws, tilt_measured,
-                                   tilt_round_coupling, noise, time_s)
-    cs = {r: corrected_range(k_i * to_pct, e) for r, e in errs.items()}
-    std, per = cs["standard"], cs["periodic"]
-    c = per if table_reading == "periodic" else std
-    u_bound = math.sqrt(max(0.0, per.u ** 2 + (std.value - per.value) ** 2 - std.u ** 2))
-    src = (f"table angle at the stops (the standard's reading, A.4.1 per stop, independent "
-           f"rectangular ±MPE: corrected {std.value:.4g} %, u {std.u:.3g} %; the physical "
-           f"model, one periodic error at the bound, order {worst.order}, phase drawn, rounds "
-           f"correlated: corrected {per.value:.4g} %, u {per.u:.3g} %), " + src)
+    k_i, errs, src = _round_errors(k_i, th, {table_reading: (tab + quant) * to_pct}, rng,
+                                   draws, tilt_measured, tilt_round_coupling, noise, time_s)
+    c = corrected_range(k_i * to_pct, errs[table_reading])
+    tab_src = {
+        "stated": "table angle at every position the rounds reach (A.4.1 per position, "
+                  "rectangular ±MPE, independent, the common zero shared by every round)",
+        "standard": "table angle at the stops (A.4.1 per stop, independent rectangular ±MPE, "
+                    "the zero inside each stop's error)",
+        "periodic": f"table angle from one periodic error at the A.4.1 bound, order "
+                    f"{worst.order}, phase drawn, rounds correlated"}[table_reading]
+    if table_reading == "stated":
+        tab_src += (f"; one periodic error at the bound of the order that spreads the K_i most "
+                    f"(order {worst.order}) would add up to "
+                    f"{200.0 * worst.half_range_rel:.3g} % to the range (a worst case, not "
+                    f"stated)")
     lines = [_Line(from_u("K_rng", 0.0, c.u, type="B",
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
-                                 f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
-                                 f"alone {c.noise_range:.4g} %, corrected {c.value:.4g} % "
-                                 f"({'periodic' if c is per else 'standard'} reading)"),
+                                 f"K_i: {tab_src}, {src}; measured range {c.measured:.4g} %, of "
+                                 f"the errors alone {c.noise_range:.4g} %, corrected "
+                                 f"{c.value:.4g} %"),
                    "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")]
-    if table_reading == "stated" and u_bound > 0:
-        lines.append(_Line(from_u("K_tab", 0.0, u_bound, type="B",
-                                  source=f"the table at its A.4.1 bound, one periodic error of "
-                                         f"order {worst.order}: u² = max(0, u_p² + (v_s − v_p)² "
-                                         f"− u_s²), the periodic reading's spread u_p "
-                                         f"{per.u:.3g} % and its correction's difference v_s − "
-                                         f"v_p {std.value - per.value:.3g} % from the stated "
-                                         f"value, beyond the standard's u_s {std.u:.3g} %"),
-                           "table at its MPE bound (periodic)", True,
-                           "A.4.1 applied to 7.2"))
-    # the belt's 95 % interval; stated: both readings' union (holds K_l in either)
-    lo, hi = ((min(std.interval[0], per.interval[0]), max(std.interval[1], per.interval[1]))
-              if table_reading == "stated" else c.interval)
+    lo, hi = c.interval
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)

@@ -872,7 +872,8 @@ def item_coverage_lines(cases) -> list[str]:
                             f"mean width {ih['mean_width']:.3g})")
             if "z_chi2" in it:
                 txt += (f"   chi2 z mean {it['z_chi2']['mean']:+.2f} "
-                        f"sd {it['z_chi2']['sd']:.2f}")
+                        f"sd {it['z_chi2']['sd']:.2f}"
+                        + (f" rms {it['z_chi2']['rms']:.2f}" if "rms" in it["z_chi2"] else ""))
                 if "predicted" in it:     # R: its exact distribution at the σ_i found
                     pr = it["predicted"]
                     txt += (f" (exact at the ensemble sigma_i: {pr['z_chi2_mean']:+.2f} sd "
@@ -884,8 +885,16 @@ def item_coverage_lines(cases) -> list[str]:
             if "two_sided" in it:
                 txt += "   " + two_sided_text(it["two_sided"])
             if "max_interval" in it:      # E's certified statement first
-                txt += (f"   {MAX_INTERVAL_LINE}: " + two_sided_text(it["max_interval"])
-                        + f", mean width {it['max_interval']['mean_width']:.3g}")
+                mi = it["max_interval"]
+                txt += (f"   {MAX_INTERVAL_LINE}: " + two_sided_text(mi)
+                        + f", mean width {mi['mean_width']:.3g}")
+                if "miss_above" in mi:
+                    txt += (f", missed above {mi['miss_above']['n']}, below "
+                            f"{mi['miss_below']['n']}")
+                if "z_level" in mi:       # the statement's own z (its family's level)
+                    zl = mi["z_level"]
+                    txt += (f", level z mean {zl['mean']:+.2f} sd {zl['sd']:.2f} "
+                            f"rms {zl['rms']:.2f}")
             if "max_statement" in it:     # the draft's form beside, labelled
                 txt += f"   {MAX_STATEMENT_LINE}: " + two_sided_text(it["max_statement"])
             out.append(txt)
