@@ -1,0 +1,55 @@
+"""The statement's own z of E's extreme (:func:`uncertainty.extreme.max_abs_level_z`) against
+the interval it belongs to and against its distribution where the interval is exact.
+
+- Consistency with the stated interval: the 95 % interval (:func:`max_abs_interval`, normal
+  factors) holds θ exactly when |z| ≤ Φ⁻¹(0.975), and z's sign says on which side it misses.
+- One point: the folded normal's interval, z = (|x| − θ)/u in closed form (|x| ≫ u).
+- The upper side's worst pattern (one point far above the others): |z| is half-normal there
+  (the interval at p misses with 1 − p), so P(|z| ≤ 1.96) ≈ 0.95 and z's root mean square ≈ 1,
+  from draws of the estimates (not from the formula of the factors); at twelve alike points it
+  is narrower (the every-pattern interval's price)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import binomtest
+
+from uncertainty.extreme import max_abs_interval, max_abs_level_z
+
+Z95 = 1.959963984540054
+
+
+def test_level_z_agrees_with_the_stated_interval():
+    rng = np.random.default_rng(20261201)
+    for _ in range(40):
+        m = int(rng.integers(1, 13))
+        mu = rng.normal(0.0, 2.0, m)
+        u = rng.uniform(0.2, 1.0, m)
+        x = mu + rng.normal(0.0, 1.0, m) * u
+        theta = float(np.abs(mu).max())
+        r = max_abs_interval(x, u)
+        z = max_abs_level_z(x, u, theta)
+        holds = r.lower <= theta <= r.upper
+        assert holds == (abs(z) <= Z95 + 1e-6), (x, u, theta, z, r)
+        if not holds:
+            assert (z < 0) == (theta > r.upper)
+
+
+def test_one_point_is_the_normal_z():
+    for x, th in ((5.0, 4.2), (5.0, 6.1), (-7.0, 6.5)):
+        assert abs(max_abs_level_z([x], [0.5], th) - (abs(x) - th) / 0.5) < 1e-6
+
+
+def test_half_normal_at_the_dominant_pattern_and_narrower_where_alike():
+    rng = np.random.default_rng(7)
+    n = 300
+    mu = np.array([20.0] + [0.0] * 11)
+    z = np.array([max_abs_level_z(mu + rng.normal(0.0, 1.0, 12), np.ones(12), 20.0)
+                  for _ in range(n)])
+    inside = int(np.sum(np.abs(z) <= Z95))
+    assert binomtest(inside, n, 0.95).pvalue > 0.01, inside
+    assert 0.85 <= float(np.sqrt(np.mean(z * z))) <= 1.15
+    alike = np.full(12, 20.0)
+    za = np.array([max_abs_level_z(alike + rng.normal(0.0, 1.0, 12), np.ones(12), 20.0)
+                   for _ in range(100)])
+    assert float(np.sqrt(np.mean(za * za))) < 0.85
