@@ -77,11 +77,12 @@ def test_conformity_for_any_specification_item():
     r = rate_like()
     out = decide_result(r, LAB)
     b = r.items["bias"].conformity
-    # guarded: acceptance interval [−0.5 + U, 0.5 − U] = [−0.4445, 0.4445]; 0.40 inside
+    # guarded, decided on the printed U (0.0555 is stated 0.056, two significant digits):
+    # acceptance interval [−0.5 + U, 0.5 − U] = [−0.444, 0.444]; 0.40 inside
     assert (b.rule, b.outcome, b.limits_from, b.source) == ("guarded", "pass", "lab file",
                                                             "datasheet")
-    assert b.guard_band == pytest.approx(0.0555) and b.acceptance_upper == pytest.approx(0.4445)
-    u = 0.0555 / 2.776
+    assert b.guard_band == pytest.approx(0.056) and b.acceptance_upper == pytest.approx(0.444)
+    u = 0.056 / 2.776
     p_c = 0.5 * (math.erf((0.5 - 0.40) / u / math.sqrt(2)) - math.erf((-0.5 - 0.40) / u / math.sqrt(2)))
     assert b.conformance_probability == pytest.approx(p_c, rel=1e-12)
     t = r.items["threshold"].conformity
