@@ -70,10 +70,31 @@ def readings_metadata(path) -> dict[str, str]:
     return out
 
 
-def readings_provenance(path) -> dict:
+def readings_provenance(path, named=()) -> dict:
     """:func:`provenance` of a readings file's or a stream's metadata
-    (:func:`readings_metadata`)."""
-    return provenance(readings_metadata(path))
+    (:func:`readings_metadata`), and of each file the readings name as part of their data
+    (``named``: a triad's thermal readings, the optical static record): the calibration is
+    virtual when any file it reads is; ``evidence`` names another file's keys as
+    ``file:key``.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "r.csv").write_text(chr(10).join(["# serial: X", "t,v", ""]))
+    >>> _ = (d / "th.csv").write_text(chr(10).join(["# bench: b", "# seed: 3", "t,v", ""]))
+    >>> p = readings_provenance(d / "r.csv", [d / "th.csv"])
+    >>> p["virtual"], p["seed"], p["evidence"]
+    (True, '3', ['th.csv:bench', 'th.csv:seed'])
+    """
+    out = provenance(readings_metadata(path))
+    for other in named:
+        more = provenance(readings_metadata(other))
+        if not more["virtual"]:
+            continue
+        out = {**out, **{k: more[k] for k in ("bench", "seed", "generator") if not out.get(k)},
+               "virtual": True,
+               "evidence": [*out["evidence"], *(f"{Path(other).name}:{k}"
+                                                for k in more["evidence"])]}
+    return out
 
 
 def result_provenance(res: Mapping) -> dict:

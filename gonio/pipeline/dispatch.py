@@ -20,8 +20,8 @@ from gonio.specs import Specification, decide_conformity, get
 from gonio.result.findings import UNREAD_CODE, Finding
 
 __all__ = ["spec_of", "refuse_options", "readings_spec", "simulate", "load_lab_file",
-           "screen_and_calibrate", "decide_conformity", "mark_provenance", "calibrate", "demo",
-           "budget"]
+           "screen_and_calibrate", "decide_conformity", "mark_provenance", "named_files",
+           "calibrate", "demo", "budget"]
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
 COMMON_CALIBRATE = frozenset({"monte_carlo_trials"})
@@ -163,11 +163,22 @@ def unread_columns(spec: Specification, readings) -> list[Finding]:
             for name in header if name not in known and name != "line"]
 
 
-def mark_provenance(result, readings) -> None:
-    """Set ``result.provenance`` from the readings' own metadata
-    (:func:`gonio.formats.provenance.readings_provenance`): readings from the virtual bench are
-    marked virtual on every output whatever the laboratory file says; nothing turns it off."""
-    result.provenance = readings_provenance(readings)
+def named_files(spec, readings) -> list[Path]:
+    """The files the readings name as part of their data (``spec.named_inputs``: a triad's
+    thermal readings, the optical static record) that exist; [] for a specification that
+    names none. A named file that is missing is the specification's own refusal."""
+    if spec.named_inputs is None:
+        return []
+    return [Path(p) for p in spec.named_inputs(readings) if Path(p).is_file()]
+
+
+def mark_provenance(result, readings, named=()) -> None:
+    """Set ``result.provenance`` from the readings' own metadata and that of every file they
+    name as part of their data (``named``; :func:`gonio.formats.provenance.readings_provenance`):
+    readings from the virtual bench are marked virtual on every output whatever the
+    laboratory file says, also where only a named file (a thermal programme) is the
+    bench's; nothing turns it off."""
+    result.provenance = readings_provenance(readings, named)
 
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
@@ -193,8 +204,10 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
+    named = named_files(spec, readings)
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
-                              else None, record=record)     # refused here, before the work
+                              else None, record=record,
+                              named=named)                   # refused here, before the work
     if "table_calibration" in spec.calibrate_options and (lab_d or {}).get("table_calibration"):
         from gonio.formats.provenance import readings_metadata
         from gonio.pipeline.equipment import lab_table_calibration
@@ -208,7 +221,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
         opts.setdefault("gyro_type", gyro)     # the instrument's type (the records' registered)
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
-    mark_provenance(result, readings)
+    mark_provenance(result, readings, named)
     result.findings = (list(result.findings) + identity       # proceeding: stated as findings
                        + unread_columns(spec, readings))
     decide_conformity(result, lab_d)

@@ -139,24 +139,65 @@ def _message(c: dict) -> str:
 MISMATCH_CODE = IDENTITY_CODE
 
 
+def named_contradictions(metadata: dict, named: dict, lab: dict | None,
+                         record: dict | None, readings_name: str) -> list[dict]:
+    """Each contradiction of the identity texts (serial, model, manufacturer, gyro type: not
+    the conditions, which a chamber programme changes on purpose) of the files the readings
+    name as part of their data (``named``: {file name: its metadata}) with the readings'
+    own ``metadata``, with ``lab`` and with ``record``: a thermal programme or a static
+    record of another instrument is not this calibration's, whatever file it came in.
+
+    >>> [(c["by"], c["lab"]) for c in named_contradictions(
+    ...     {"serial": "T-1"}, {"thermal.csv": {"serial": "T-9"}}, None, None, "readings.csv")]
+    [('thermal.csv says', "'T-1'")]
+    >>> named_contradictions({"serial": "T-1"}, {"thermal.csv": {"serial": " t-1"}}, None,
+    ...                      None, "readings.csv")
+    []
+    """
+    out = []
+    own = {"instrument": {key: v for _, _, key, md_keys in TEXT_FIELDS
+                          for v in [_first(metadata, md_keys)[1]] if v}}
+    for name, md in named.items():
+        for other, of, lab_key in ((own, f"{readings_name} says", "# {k}"),
+                                   ({**(lab or {}), "environment": {}}, "the laboratory file",
+                                    "[instrument] {k}"),
+                                   ({"instrument": record or {}}, RECORD,
+                                    "the records' {k}")):
+            for c in contradictions(md, other):
+                if c["tolerance"] is None:
+                    out.append({**c, "key": f"# {c['key']}", "by": f"{name} says",
+                                "of": of, "lab_key": lab_key.format(
+                                    k=c["lab_key"].split(".")[-1])})
+    return out
+
+
 def check_identity(readings, lab: dict | None, *, lab_file=None,
-                   record: dict | None = None) -> list[Finding]:
+                   record: dict | None = None, named=()) -> list[Finding]:
     """Compare the readings' identity and conditions with ``lab`` (module docstring), and,
     with ``record`` (``calibrate --record``: the registered instrument's texts, see
-    :func:`record_contradictions`), the readings and the laboratory file with the records: no
-    contradiction gives ``[]``; one refuses (GonioError naming the readings and the key)
-    unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged findings are
-    returned for the result."""
-    md = readings_metadata(readings) if lab or record else {}
+    :func:`record_contradictions`), the readings and the laboratory file with the records;
+    the identity texts of each file the readings name as part of their data (``named``:
+    paths; :func:`named_contradictions`) with the readings, the laboratory file and the
+    record: no contradiction gives ``[]``; one refuses (GonioError naming the readings and
+    the key) unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged
+    findings are returned for the result."""
+    md = readings_metadata(readings) if lab or record or named else {}
     found = contradictions(md, lab) + record_contradictions(md, lab, record)
+    found += named_contradictions(md, {Path(p).name: readings_metadata(p) for p in named},
+                                  lab, record, Path(readings).name)
     if not found:
         return []
     if (((lab or {}).get("identity") or {}).get("on_mismatch") or "refuse") != "proceed":
         c = found[0]
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         where = f" ({lab_file})" if lab_file else ""
-        named = f"the records and the laboratory file{where} name" if "by" in c else \
-            f"the laboratory file{where} names"
+        if c.get("of") == RECORD:
+            named = f"the records and the laboratory file{where} name"
+        elif "by" in c:
+            named = f"the readings and the laboratory file{where} name (a file of another " \
+                "instrument among the files the readings name)"
+        else:
+            named = f"the laboratory file{where} names"
         raise GonioError(f"{_message(c)}{more}: the readings are not of the instrument or "
                          f"conditions {named}; correct one of them, "
                          "or set [identity] on_mismatch = \"proceed\" to state it on the "

@@ -270,19 +270,21 @@ def lab_environment(details: dict) -> dict:
 
 def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | None,
                     res_path: Path) -> None:
-    """The readings ``rd`` against the laboratory file ``lab`` and the registered instrument's
-    ``record`` as ``gonio calibrate`` compares them
+    """The readings ``rd`` (and the files they name as part of their data) against the
+    laboratory file ``lab`` and the registered instrument's ``record`` as ``gonio calibrate``
+    compares them
     (:func:`gonio.pipeline.identity.check_identity`): a contradiction is refused (one line)
     unless the laboratory file proceeds, and then results.json must state it (a folder computed
     without this laboratory file, or before the instrument's record said otherwise, states
     none: calibrate it again)."""
-    if lab is None and record is None:
-        return
-    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.pipeline.dispatch import load_lab_file, named_files
     from gonio.pipeline.identity import MISMATCH_CODE, check_identity
     from gonio.specs import get
+    named = named_files(get(spec_key), rd)
+    if lab is None and record is None and not named:
+        return
     details = load_lab_file(lab, get(spec_key)) if lab is not None else None
-    found = check_identity(rd, details, lab_file=lab, record=record)
+    found = check_identity(rd, details, lab_file=lab, record=record, named=named)
     stated = {str(f.get("message")) for f in results.get("findings") or []
               if isinstance(f, dict) and f.get("code") == MISMATCH_CODE}
     missing = [f.message for f in found if f.message not in stated]
