@@ -957,6 +957,23 @@ def _governed(s: Session, st: Standard, start: _dt.date, sha256: str,
     return None
 
 
+def _refuse_withdrawn_bytes(s: Session, sha256: str) -> None:
+    """Refuse to register ``sha256`` where the register holds it as a withdrawn entry (of
+    any table): a withdrawal is asked by one person and approved by another, so one person
+    registering the same bytes again would undo it alone. Only a new file (another SHA-256)
+    takes a withdrawn entry's place (docs/records.md, the register: withdrawn)."""
+    entries = s.scalars(select(TableCalibration).where(TableCalibration.sha256 == sha256)
+                        .order_by(TableCalibration.id)).all()
+    gone = withdrawals(s, [e.id for e in entries])
+    for e in entries:
+        if e.id in gone:
+            raise GonioError(f"this file (SHA-256 {sha256[:16]}…) is table calibration "
+                             f"{e.id} ({e.certificate or e.name}), "
+                             f"withdrawn on {gone[e.id].withdrawn_at:%Y-%m-%d %H:%M} UTC: "
+                             "a withdrawn entry's bytes are not registered again (register "
+                             "the corrected file)", key="sha256")
+
+
 def register_table_calibration(store, actor: User, *, standard_id: int, sha256: str,
                                name: str = "", valid_from=None, due_on=None,
                                certificate: str = "") -> TableCalibration:
@@ -996,6 +1013,7 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
         others = s.scalars(select(TableCalibration).where(
             TableCalibration.standard_id == st.id)).all()
         withdrawn = withdrawals(s, [o.id for o in others])
+        _refuse_withdrawn_bytes(s, sha256)
         for other in others:
             if other.id in withdrawn:
                 continue
@@ -1032,8 +1050,8 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
 
 def withdrawal_affected(s: Session, tc_id: int) -> list[Calibration]:
     """The calibrations made with the register's entry ``tc_id`` (their seal names it): those
-    a withdrawal of it leaves as they are and lists as affected — the laboratory's review
-    (docs/records.md, the register: a flag, no state of its own)."""
+    a withdrawal of it leaves as they are, lists as affected and stops from review, approval
+    and issue (:func:`_not_withdrawn`; docs/records.md, the register: affected)."""
     return list(s.scalars(select(Calibration).where(
         Calibration.table_calibration_id == int(tc_id)).order_by(Calibration.id)))
 
@@ -1715,7 +1733,27 @@ def _check(s: Session, actor: User, cal_id: int, action: str,
         check_duties(s, cal, actor, action)
     if action in ("review", "approve"):
         _complete(s, cal, action)
+        _not_withdrawn(s, cal, action)
     return cal
+
+
+def _not_withdrawn(s: Session, cal: Calibration, action: str) -> None:
+    """Refuse to ``action`` (review, approve — a first issue or an amendment —, issue) a
+    calibration made with a register entry that was withdrawn: its correction is one the
+    laboratory took back, so the calibration is computed again with an entry in force (a new
+    calibration, or the run imported again); one issued before stays issued and is listed as
+    affected (docs/records.md, the register: withdrawn)."""
+    if cal.table_calibration_id is None:
+        return
+    gone = withdrawals(s, [cal.table_calibration_id]).get(cal.table_calibration_id)
+    if gone is None:
+        return
+    tc = s.get(TableCalibration, cal.table_calibration_id)
+    raise GonioError(f"cannot {action} calibration {cal.id}: it was made with table "
+                     f"calibration {tc.id} ({tc.certificate or tc.name}), withdrawn on "
+                     f"{gone.withdrawn_at:%Y-%m-%d %H:%M} UTC (reason: "
+                     f"{' '.join(gone.reason.split())}); make a new calibration (or import "
+                     "the run again) with a table calibration in force", key="table_calibration")
 
 
 def _complete(s: Session, cal: Calibration, action: str) -> None:
@@ -2318,6 +2356,8 @@ def sealed_result(store, cal_id: int) -> bytes:
     signed = seal(store, cal_id)
     cal = calibration(store, cal_id)
     _approved(signed, cal.approved_seal, "issued")
+    with store.session() as s:
+        _not_withdrawn(s, cal, "issue")
     return file_bytes(store, cal.results_sha256)
 
 
@@ -2339,6 +2379,7 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
                              "nothing issued twice", key="issue")
         before = state(cal)
         _approved(signed, cal.approved_seal, "issued")
+        _not_withdrawn(s, cal, "issue")
         for sha, size in files.values():
             if s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
+import hashlib
 import io
 import json
 
@@ -25,7 +26,7 @@ from sqlalchemy.exc import DBAPIError, IntegrityError
 
 from gonio.errors import GonioError
 from gonio.records import services
-from gonio.records.models import (AuditEvent, Calibration, TableCalibration,
+from gonio.records.models import (AuditEvent, Calibration, Certificate, TableCalibration,
                                   TableCalibrationWithdrawal)
 
 from .conftest import PASSWORD
@@ -33,8 +34,12 @@ from .test_records_table_register import (FILES, SHA, VALID, create, in_force_he
                                           setup_lab)
 
 
-def reg(store, actor, table_id, key, start, due, name=None):
-    sha, _ = services.store_file(store, io.BytesIO(FILES[key]))
+#: the corrected file registered in a withdrawn TC-2's place: its own bytes (another SHA-256)
+CORRECTED = FILES["TC-2"].replace(b"TC-2\n", b"TC-2 (corrected issue)\n")
+
+
+def reg(store, actor, table_id, key, start, due, name=None, content=None):
+    sha, _ = services.store_file(store, io.BytesIO(FILES[key] if content is None else content))
     return services.register_table_calibration(store, actor, standard_id=table_id, sha256=sha,
                                                name=name or f"{key}.csv", valid_from=start,
                                                due_on=due, certificate=key)
@@ -156,15 +161,21 @@ def test_withdrawal_two_people_frozen_and_in_force_again(store, computed_folder)
     refused); its row is frozen by the database; from then on TC-2 is in force on no day and
     TC-1 is in force where the second rule without TC-2 says, every day of two years; a
     calibration made with TC-2 keeps it, its seal unchanged, and is listed as affected (the
-    register, the audit trail); TC-2's file and day can be registered again rightly; a
+    register, the audit trail); TC-2's bytes are refused (for any table) and a corrected file is registered on its day; a
     request declined leaves the entry in force."""
     people, inst_id, table_id, _ = setup_lab(store)
     tech, rev, rev2 = people["tech"], people["rev"], people["rev2"]
     ids = {k: register(store, tech, table_id, k).id for k in VALID}
-    used = create(store, tech, inst_id, "2025-07-01", [table_id])
-    assert used.table_calibration_id == ids["TC-2"]
-    services.store_run(store, used.id, computed_folder)
+    made = []
+    for _ in range(3):       # computed; reviewed; approved (issuing) — all with TC-2
+        made.append(create(store, tech, inst_id, "2025-07-01", [table_id]))
+        assert made[-1].table_calibration_id == ids["TC-2"]
+        services.store_run(store, made[-1].id, computed_folder)
+    used, in_review, issuing = made
     signed = services.seal(store, used.id)
+    for cal in (in_review, issuing):
+        services.review(store, rev, cal.id, accept=True)
+    assert services.approve(store, rev2, issuing.id).status == "issuing"
     with pytest.raises(GonioError, match="no withdrawal of table calibration 2 is asked for"):
         services.approve_withdrawal(store, rev2, ids["TC-2"])
     only_admin = services.create_user(store, people["admin"], "boss", PASSWORD, "admin")
@@ -207,35 +218,60 @@ def test_withdrawal_two_people_frozen_and_in_force_again(store, computed_folder)
         day += dt.timedelta(days=1)
     by_cert = {r["entry"].certificate: r for r in rows}
     assert by_cert["TC-2"]["state"].startswith("withdrawn on ")
-    assert by_cert["TC-2"]["affected"] == [used.id] and by_cert["TC-1"]["affected"] == []
-    # the calibration made with it keeps it, sealed as signed: reviewed and approved (its
-    # certificate number reserved, issuing) with that entry, nothing chosen again
+    all_three = [c.id for c in made]
+    assert by_cert["TC-2"]["affected"] == all_three and by_cert["TC-1"]["affected"] == []
+    # the calibrations made with it keep it, sealed as signed, nothing chosen again — and
+    # none is reviewed, approved or issued with a withdrawn correction: each refusal one
+    # line naming the entry, the state unchanged
     assert services.calibration(store, used.id).table_calibration_id == ids["TC-2"]
     assert services.seal(store, used.id) == signed
-    services.review(store, rev, used.id, accept=True, shown_seal=signed)
-    approved = services.approve(store, rev2, used.id, shown_seal=signed)
-    assert (approved.status, approved.approved_seal, approved.table_calibration_id) == \
-        ("issuing", signed, ids["TC-2"])
+    refused = (f"it was made with table calibration {ids['TC-2']} (TC-2), withdrawn on ")
+    for act, cal, who, was in (
+            (lambda c, who: services.review(store, who, c, accept=True, shown_seal=signed),
+             used, rev, "computed"),
+            (lambda c, who: services.approve(store, who, c), in_review, rev2, "reviewed"),
+            (lambda c, who: services.sealed_result(store, c), issuing, None, "issuing"),
+            (lambda c, who: services.store_issue(store, c, computed_folder), issuing, None,
+             "issuing")):
+        with pytest.raises(GonioError) as e:
+            act(cal.id, who)
+        msg = one_line(e)
+        assert refused in msg and "with a table calibration in force" in msg, msg
+        now = services.calibration(store, cal.id)
+        assert (now.status, now.table_calibration_id) == (was, ids["TC-2"])
     with store.session() as s:
+        assert s.scalars(select(Certificate)).all() == []
         ev = s.scalar(select(AuditEvent).where(AuditEvent.action == "withdraw"))
         assert (ev.username, ev.entity, ev.entity_id) == ("rev2", "table-calibration",
                                                           str(ids["TC-2"]))
-        assert json.loads(ev.after_json)["affected"] == [used.id]
-        flag = s.scalar(select(AuditEvent).where(
-            AuditEvent.action == "table-calibration-withdrawn"))
-        assert (flag.entity, flag.entity_id) == ("calibration", str(used.id))
+        assert json.loads(ev.after_json)["affected"] == all_three
+        flags = s.scalars(select(AuditEvent).where(
+            AuditEvent.action == "table-calibration-withdrawn")).all()
+        assert [(f.entity, f.entity_id) for f in flags] == \
+            [("calibration", str(i)) for i in all_three]
     # from then on: chosen or uploaded, TC-2 is refused; without a choice TC-1 is taken
     for kw in ({"table_calibration_id": ids["TC-2"]},
                {"table_calibration_sha256": SHA["TC-2"]}):
         with pytest.raises(GonioError, match=r"table calibration 2 \(TC-2\) of RT-07 cannot "
                                              r"be used on 2025-07-01: withdrawn on "):
             create(store, tech, inst_id, "2025-07-01", [table_id], **kw)
-    # the right one registered in its place: same file, same day, the due date corrected
+    # the withdrawn entry's bytes are refused, whoever registers them, for this table or
+    # another (one person would undo a withdrawal two people made), naming the entry
+    people2, _, table2, _ = setup_lab_more(store)
+    for table in (table_id, table2):
+        with pytest.raises(GonioError) as e:
+            reg(store, tech, table, "TC-2", "2025-06-01", "2026-03-01")
+        msg = one_line(e)
+        assert (f"is table calibration {ids['TC-2']} (TC-2), withdrawn on " in msg
+                and "a withdrawn entry's bytes are not registered again" in msg), msg
+    assert len(services.table_calibrations(store)) == 2
+    # the right one registered in its place: a new file, same day, the due date corrected
     # (the calibration made with TC-2 is affected, so it does not block)
-    again = reg(store, tech, table_id, "TC-2", "2025-06-01", "2026-03-01")
+    again = reg(store, tech, table_id, "TC-2", "2025-06-01", "2026-03-01", content=CORRECTED)
     assert again.id not in (ids["TC-1"], ids["TC-2"])
+    assert again.sha256 == hashlib.sha256(CORRECTED).hexdigest() != SHA["TC-2"]
     cal = create(store, tech, inst_id, "2025-07-01", [table_id],
-                 table_calibration_sha256=SHA["TC-2"])
+                 table_calibration_sha256=again.sha256)
     assert cal.table_calibration_id == again.id
     # declined: the entry stays in force
     services.ask_withdrawal(store, tech, ids["TC-1"], "checking")
@@ -298,10 +334,12 @@ def test_withdrawal_on_the_web_and_in_the_export(store, tmp_path, computed_folde
     assert 'id="table-calibration-withdrawn"' not in tech.get(f"/calibrations/{other.id}").text
 
 
-def test_withdrawal_on_the_command_line(store, capsys, monkeypatch):
+def test_withdrawal_on_the_command_line(store, tmp_path, capsys, monkeypatch):
     """``gonio db withdraw-table-calibration N --reason R`` asks, ``--approve`` by the asker is
     refused (exit 2, one line), by another reviewer withdraws; ``gonio db table-calibrations``
-    then says withdrawn, by whom and the affected calibrations."""
+    then says withdrawn, by whom and the affected calibrations; ``gonio db
+    register-table-calibration`` of the withdrawn entry's bytes is refused (exit 2), a new
+    file is registered."""
     from gonio.cli import main
 
     monkeypatch.setenv("GONIO_PASSWORD", PASSWORD)
@@ -323,12 +361,26 @@ def test_withdrawal_on_the_command_line(store, capsys, monkeypatch):
     assert line[7].startswith("withdrawn on ")
     assert line[10] == (f"withdrawn by rev2 (asked by rev): wrong table; affected: "
                         f"calibration {used.id}")
+    # the technician alone registers the same bytes again, same certificate and dates:
+    # refused (exit 2, one line naming the withdrawn entry), nothing registered
+    (tmp_path / "tc.csv").write_bytes(FILES["TC-1"])
+    again = ["db", "register-table-calibration", str(tmp_path / "tc.csv"), "--table", "RT-07",
+             "--valid-from", VALID["TC-1"][0], "--due-on", VALID["TC-1"][1], "--certificate",
+             "TC-1", "--user", "tech", *where]
+    assert main(again) == 2
+    err = capsys.readouterr().err
+    assert (f"is table calibration {tc.id} (TC-1), withdrawn on " in err
+            and err.count("\n") == 1 and "Traceback" not in err), err
+    assert len(services.table_calibrations(store)) == 1
+    (tmp_path / "tc.csv").write_bytes(CORRECTED)      # a new file is registered
+    assert main(again) == 0
+    assert len(services.table_calibrations(store)) == 2
 
 
 def test_migration_0010_over_0009(tmp_path, pg_server):
     """Records at 0009 with a register entry a calibration used, upgraded to 0010: the rows
     kept, the register still frozen, its reference from calibrations still enforced, a
-    withdrawn entry's file and day registrable again; back down to 0009 the database's rules
+    withdrawn entry's day registrable again with a corrected file; back down to 0009 the database's rules
     return, and a register holding such a pair is refused by the down-migration in words —
     on SQLite and PostgreSQL."""
     from gonio.records.db import migrate, open_store
@@ -383,7 +435,8 @@ def test_migration_0010_over_0009(tmp_path, pg_server):
             assert services.calibration(st, cal.id).table_calibration_id == 2
             services.ask_withdrawal(st, people["rev"], 2, "wrong")
             services.approve_withdrawal(st, people["rev2"], 2)
-            reg(st, people["tech"], table_id, "TC-2", "2025-06-01", "2026-03-01")
+            reg(st, people["tech"], table_id, "TC-2", "2025-06-01", "2026-03-01",
+                content=CORRECTED)
             with pytest.raises(RuntimeError, match="cannot downgrade below 0010: the register "
                                                    "holds 1 pair"):
                 _downgrade(st.engine, "0009")
