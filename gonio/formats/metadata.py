@@ -89,6 +89,53 @@ def header_lines(path):
                 return
 
 
+def metadata_block(lines, file=None) -> tuple[dict[str, str], int]:
+    """The ``# key: value`` lines at the top of a file's ``lines`` (blank lines and a bare
+    ``#`` among them allowed) as a dict, and the index of the first line after them (the
+    header row). The one parser of a metadata block held in memory, shared by the triad's
+    readings and the optical draft's static record; a line without ``:`` or a key given
+    twice is a GonioError naming ``file`` and the line (nothing silently overridden).
+
+    >>> metadata_block(["# format: x", "", "#", "# k : v ", "t,v", "1,2"])
+    ({'format': 'x', 'k': 'v'}, 4)
+    >>> metadata_block(["# a: 1", "# a: 2"], "f.csv")
+    Traceback (most recent call last):
+    gonio.errors.GonioError: f.csv:2: metadata key 'a' given twice
+    """
+    meta: dict[str, str] = {}
+    i = 0
+    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+        body = lines[i][1:].strip() if lines[i].startswith("#") else ""
+        if body:
+            if ":" not in body:
+                raise GonioError("metadata line must be '# key: value'", file=file, line=i + 1)
+            k, v = body.split(":", 1)
+            k = k.strip()
+            if k in meta:
+                raise GonioError(f"metadata key {k!r} given twice", file=file, line=i + 1)
+            meta[k] = v.strip()
+        i += 1
+    return meta, i
+
+
+def named_files(path, key: str) -> list[Path]:
+    """The files a readings file names as part of its data by its ``# key:`` metadata line
+    (relative to its folder), read from its leading metadata lines (:func:`header_lines`;
+    a stream is never read whole). An unreadable or binary file names nothing: its reader
+    reports it (the triad's ``# thermal_readings:``, the optical draft's
+    ``# static_record:``)."""
+    out: list[Path] = []
+    try:
+        pairs = list(header_lines(path))
+    except (OSError, GonioError):
+        return out
+    for k, v in pairs:
+        if k == key and v:
+            p = Path(v)
+            out.append(p if p.is_absolute() else Path(path).parent / p)
+    return out
+
+
 def metadata_float(metadata: Mapping[str, str], key: str, *,
                    file: str | Path | None = None) -> float | None:
     """The numeric metadata value ``key``, validated, or None when absent.

@@ -84,12 +84,9 @@ def read_static_record(path) -> StaticRecord:
     from gonio.errors import GonioError, check_input_file, read_utf8
     check_input_file(path, "static record file")
     text = read_utf8(path, "static record file")
+    from gonio.formats.metadata import metadata_block
     lines = text.splitlines()
-    meta, i = {}, 0
-    while i < len(lines) and lines[i].startswith("#"):
-        k, _, v = lines[i][1:].partition(":")
-        meta[k.strip()] = v.strip()
-        i += 1
+    meta, i = metadata_block(lines, path)
     if meta.get("format") != FORMAT:
         raise GonioError(f"not a static record file (its first line is not '# format: "
                          f"{FORMAT}')", file=path, line=1)
@@ -151,22 +148,10 @@ def named_static_record(readings_path, metadata: dict) -> StaticRecord | None:
 def named_inputs(path) -> list:
     """The files a readings file names as part of its data (``# static_record:``, relative to
     its folder): inputs no output may replace, and the records keep with the readings. Only
-    the metadata lines at the top are read; an unreadable file, or a stream, names nothing."""
-    from pathlib import Path
-    out = []
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(1 << 16).decode("utf-8", "replace")
-    except OSError:
-        return out
-    for ln in head.lstrip("\ufeff").splitlines():
-        if not ln.startswith("#"):
-            break
-        k, sep, v = ln[1:].partition(":")
-        if sep and k.strip() == METADATA_KEY and v.strip():
-            p = Path(v.strip())
-            out.append(p if p.is_absolute() else Path(path).parent / p)
-    return out
+    the metadata lines at the top are read (:func:`gonio.formats.metadata.named_files`); an
+    unreadable file, or a stream, names nothing."""
+    from gonio.formats.metadata import named_files
+    return named_files(path, METADATA_KEY)
 
 
 #: The name the demo gives the static record file it writes beside its readings.

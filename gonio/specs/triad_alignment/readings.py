@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError, check_header, read_utf8
+from gonio.formats.metadata import metadata_block, named_files
 
 FORMAT = "gonio-triad-readings/1"
 TESTS = ("alignment", "static", "thermal")
@@ -130,22 +131,8 @@ def _check_number(meta: dict, key: str, ok, expect: str, file) -> None:
 def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReadings:
     """Parse and validate the text of a triad readings file (see the module docstring)."""
     file = str(path)
-    meta: dict[str, str] = {}
     lines = text.splitlines()
-    i = 0
-    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
-        ln = lines[i]
-        if ln.startswith("#"):
-            body = ln[1:].strip()
-            if body:
-                if ":" not in body:
-                    raise GonioError("metadata line must be '# key: value'", file=file, line=i + 1)
-                k, v = body.split(":", 1)
-                k = k.strip()
-                if k in meta:
-                    raise GonioError(f"metadata key {k!r} given twice", file=file, line=i + 1)
-                meta[k] = v.strip()
-        i += 1
+    meta, i = metadata_block(lines, file)
     if i >= len(lines):
         raise GonioError("no header row", file=file, line=i + 1)
     for k in REQUIRED_METADATA:
@@ -272,22 +259,8 @@ def check_triad_rows(df: pd.DataFrame, file) -> None:
 
 def named_inputs(path: str | Path) -> list[Path]:
     """The files a triad readings file names as part of its data (``# thermal_readings:``,
-    relative to its folder): inputs no output may replace. Only the metadata lines at the
-    top are read; an unreadable file names nothing (the reader reports it later)."""
-    out = []
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(1 << 16).decode("utf-8", "replace")
-    except OSError:
-        return out
-    for ln in head.splitlines():
-        if not ln.startswith("#"):
-            break
-        k, sep, v = ln[1:].partition(":")
-        if sep and k.strip() == "thermal_readings" and v.strip():
-            p = Path(v.strip())
-            out.append(p if p.is_absolute() else Path(path).parent / p)
-    return out
+    relative to its folder): inputs no output may replace (:func:`gonio.formats.metadata.named_files`)."""
+    return named_files(path, "thermal_readings")
 
 
 def read_triad_readings(path: str | Path) -> TriadReadings:
