@@ -16,21 +16,36 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   (:data:`A1_MAX_TIME_S`); only an explicit key widens it.
 - **indicated angle** — each reading's indicated angle (``gyro_deg``, else
   ``gyro_counts`` / K_ref with K_ref the median of counts / table angle over every rotation
-  reading of the file, so the other rounds predict it) less the table angle, against the
-  other readings of its condition (test, rate, orientation): set aside when
-  ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
+  reading of the file, so the other rounds predict it) less the table angle, r, against the
+  other readings of its condition (test, rate, orientation), with a threshold that follows
+  the spread those readings show and a floor of ``ROUND_FLOOR_STEPS`` = ``SPREAD_FLOOR_STEPS``
+  steps of the instrument's resolution (one count; the ``gyro_deg`` column's step):
+
+  * rounds read in at least ``PER_ROUND_MIN`` series (7.4): against its round
+    (:func:`round_threshold_arcsec`);
+  * positions read once (7.1; 7.6, 7.7 once per rate or orientation), at least ``LINE_MIN``
+    readings: d = r less the 7.4 reference round's median at the same angle (the position's
+    own error), against the least-squares fit in the angle (a line; with cos θ, sin θ where
+    12 positions allow) of the condition's other readings, leave one out, set aside when
+    ``|d − fit| > max(SPREAD_Z · s · √(1 + h), DRIFT_Z · drift, floor)``, s the others'
+    1.4826 · MAD (never below the reference's pooled s), drift the draft's zero-stability
+    bound times the reading's time from zeroing (:func:`line_departures`);
+  * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
   warm-up, bias instability), so over the 70 min of 7.3 its readings spread beyond the
   floor around their median while each stays on the path its neighbours draw. The
   residual e_i is the reading less the line through its two neighbours (the two nearest,
-  extrapolated, for the first and last); set aside
-  when ``|e − median(e)| > max(ROBUST_Z · 1.4826 · MAD(e), ANGLE_FLOOR_ARCSEC)``, e and the
-  threshold those of the other readings: the candidate is the reading without which the
-  others' residuals are smallest (a typo moves its neighbours' residuals and their MAD
-  too), e its departure from the line its neighbours among the others draw; the rule then
-  runs again on the others. A series of fewer than four readings, or with repeated
-  times, uses the median rule.
+  extrapolated, for the first and last, judged on the inner residuals' scale); set aside
+  when ``|e − median(e)| > max(REST_Z · 1.4826 · MAD(e), SPREAD_FLOOR_STEPS steps)``, e
+  and the threshold those of the other readings: the candidate is the reading without
+  which the others' residuals are smallest (a typo moves its neighbours' residuals and
+  their MAD too), e its departure from the line its neighbours among the others draw; the
+  rule then runs again on the others. A series of fewer than four readings, or with
+  repeated times, uses the median rule.
+
+The z values were measured on clean sessions of the built-in programme, the false alarms
+and the typos caught are in docs/draft-readings.md ("Screening").
 - **7.3 schedule** — each series of 7.3 holds the protocol's ``readings`` rounds, round n
   at t_1 + (n − 1) · ``interval_s`` (t_1 the series' median of time_s − (n − 1) · interval_s) (within ``ZS_SCHEDULE_TOLERANCE``
   of the interval): a missing round and an off-schedule reading are flagged, saying what
@@ -55,7 +70,7 @@ import pandas as pd
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.readings import Readings, metadata_float
 from gonio.result.findings import Finding
-from gonio.units import S_PER_MIN, deg_to_arcsec
+from gonio.units import S_PER_MIN, deg_to_arcsec, dph_to_arcsec_s
 
 #: Annex A.1: "the time from the start to each calibration position is within 0.5 min".
 A1_MAX_TIME_S: float = 0.5 * S_PER_MIN
@@ -64,14 +79,13 @@ A1_TESTS: tuple[str, ...] = ("angle_deviation", "pointing_consistency")
 #: Robust z threshold of the indicated-angle rule (1.4826·MAD estimates σ for normal data:
 #: 5 σ is a false alarm in ~6e-7 of healthy readings).
 ROBUST_Z: float = 5.0
-#: Floor of the indicated-angle rule across the rounds of a condition (rounds read in fewer
-#: than ``PER_ROUND_MIN`` series: 7.1, and 7.6/7.7 read once) and of the 7.3 rule, ″: there
-#: a MAD of ~12 readings is too uncertain to stand alone (a 5 σ robust rule false-alarms in
-#: ~3 % of 12-reading Gaussian groups), so the floor stays above the spread of a healthy
-#: session (≤ 3″ at 1 °/s, where a six-minute turn drifts; ≤ 10″ over the 70 min of 7.3),
-#: below a typo in the hundreds of counts (100 counts = 4.7″ on an RLG of 76 435 counts/°)
-#: and far below a one-degree typo (3 600″). Rounds read in many series (7.4) have their
-#: own rule, down to the instrument's resolution (:func:`round_threshold_arcsec`).
+#: Floor of the median rule, ″, which judges only groups too small to show their own spread
+#: (a condition of fewer than ``LINE_MIN`` readings read once per position, a 7.3 series of
+#: fewer than ``ZS_NEIGHBOUR_MIN``): there a MAD of a few readings cannot stand alone, so the
+#: floor stays above the spread of a healthy session (≤ 3″ at 1 °/s) and far below a
+#: one-degree typo (3 600″). Every larger group has a rule that follows its own spread,
+#: down to the instrument's resolution (:func:`round_threshold_arcsec`,
+#: :func:`line_departures`, :func:`_rest_spread`).
 ANGLE_FLOOR_ARCSEC: float = 5.0
 
 #: Rounds read in at least this many series are screened round by round
@@ -319,32 +333,51 @@ def round_threshold_arcsec(r_arcsec: np.ndarray, rounds: np.ndarray, step_arcsec
                            ROUND_FLOOR_STEPS * step_arcsec)
 
 
-def _resolution_arcsec(g: pd.DataFrame, k_ref) -> float:
+def _resolution_arcsec(g: pd.DataFrame, k_ref, deg_step: float | None = None) -> float:
     """One step of the column the readings of ``g`` come from, ″: one count (1/K_ref) for
-    ``gyro_counts``; for ``gyro_deg`` the smallest non-zero step between two readings of a
-    round (0 where none is repeated to a step)."""
+    ``gyro_counts``; for ``gyro_deg`` ``deg_step`` where given (:func:`_deg_step` of the
+    file's rotation readings) and non-zero, else the smallest non-zero step between two
+    readings of a round of ``g``, else (no round read twice) between any two of ``g``
+    (0 where none)."""
     if (g["_col"] == "gyro_counts").all() and k_ref:
         return deg_to_arcsec(1.0 / float(k_ref))
-    steps = [np.diff(np.unique(x)) for _, x in g.groupby("round")["_r"]]
-    steps = np.concatenate(steps) if steps else np.array([])
+    if deg_step:
+        return float(deg_step)
+    return _deg_step(g, ["round"]) or _deg_step(g, [])
+
+
+def _deg_step(g: pd.DataFrame, keys=("test", "rate_dps", "orientation", "round")) -> float:
+    """The smallest non-zero step between two values of ``_r`` in a group of ``g`` by
+    ``keys`` (all of ``g`` for none), ″: a round read in ten series repeats values to the
+    column's step (7.4); 0 where no two differ by a step."""
+    groups = [g["_r"]] if not keys else [x for _, x in g.groupby(list(keys), dropna=False)["_r"]]
+    steps = np.concatenate([np.diff(np.unique(x.to_numpy(float))) for x in groups]) \
+        if groups else np.array([])
     steps = steps[steps > 1e-9]
     return float(steps.min()) if steps.size else 0.0
 
 
-def _round_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:
+def _departures(g: pd.DataFrame, found, what: str, file, test: str, rule: str, k_ref
+                ) -> list[Finding]:
+    """One set-aside finding per reading of ``g`` in ``found``: (position in ``g``, what it
+    departs from, the departure ″, the threshold ″ it broke, a note on the threshold). The
+    round-by-round, condition and median rules all name a reading this way."""
+    r = g["_r"].to_numpy(float)
+    return [_outlier_finding(
+        g.iloc[i], f"indicated − table angle {r[i]:.4g}″ departs from {against} by "
+        f"{abs(dev):.4g}″ (> {thr:.3g}″{note})", what, file, test, rule, k_ref)
+        for i, against, dev, thr, note in found]
+
+
+def _round_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: float
+                    ) -> list[Finding]:
     """The readings of a condition read in many series that break the round-by-round rule
     (:func:`round_threshold_arcsec`), one finding each."""
-    med, thr = round_threshold_arcsec(g["_r"].to_numpy(float), g["round"].to_numpy(),
-                                      _resolution_arcsec(g, k_ref))
     r = g["_r"].to_numpy(float)
-    out = []
-    for i in np.flatnonzero(np.abs(r - med) > thr):
-        row = g.iloc[i]
-        out.append(_outlier_finding(
-            row, f"indicated − table angle {r[i]:.4g}″ departs from the round's median "
-            f"{med[i]:.3g}″ by {abs(r[i] - med[i]):.4g}″ (> {thr[i]:.3g}″)",
-            what, file, test, _ROUND_RULE, k_ref))
-    return out
+    med, thr = round_threshold_arcsec(r, g["round"].to_numpy(), step)
+    return _departures(g, [(i, f"the round's median {med[i]:.3g}″", r[i] - med[i], thr[i], "")
+                           for i in np.flatnonzero(np.abs(r - med) > thr)],
+                       what, file, test, _ROUND_RULE, k_ref)
 
 
 _ROUND_RULE = (f"|r − median(r of the round)| > max({ROUND_Z:g} · max(s_round, s_pooled), "
@@ -352,6 +385,168 @@ _ROUND_RULE = (f"|r − median(r of the round)| > max({ROUND_Z:g} · max(s_round
                "pooled over the condition's rounds), r = indicated − table angle, indicated = "
                "gyro_deg or gyro_counts / K_ref, K_ref = median(gyro_counts / table_deg) of all "
                "rotation readings")
+
+#: A condition whose positions are read once (7.1; 7.6 and 7.7 read once per rate or
+#: orientation) of at least this many readings is screened against the line its other
+#: readings draw (:func:`line_departures`); a smaller one by the median rule
+#: (:func:`_outliers`, ``ANGLE_FLOOR_ARCSEC``).
+LINE_MIN: int = 5
+#: With at least this many other readings the condition model adds cos θ and sin θ to the
+#: line (:func:`line_departures`): 7.6 and 7.7's twelve positions, not 7.1's six.
+HARMONIC_MIN: int = 9
+#: Multiple of a reading's allowed drift (the draft's zero-stability bound, Annex A.4.3's
+#: 0.005 °/h, times its time from zeroing) below which the condition rule keeps it: at 1 °/s
+#: a clean reading 250–370 s after zeroing departed from the others' fit by up to 2.0 such
+#: drifts (clean sessions, docs/draft-readings.md "Screening"), 10.9 times the others' s.
+DRIFT_Z: float = 3.0
+#: Robust z of the condition rule (:func:`line_departures`) and of the 7.3 rule
+#: (:func:`_rest_spread`): the threshold is ``SPREAD_Z`` times the spread the group's other
+#: readings show (1.4826 · MAD of their residuals), so it follows the instrument's noise at
+#: that rate, position and time; never below ``SPREAD_FLOOR_STEPS`` steps of resolution.
+#: Measured on clean sessions of the built-in programme (docs/draft-readings.md,
+#: "Screening"): no false finding at 7 on 800 RLG and FOG sessions.
+SPREAD_Z: float = 7.0
+#: Floor of the condition and 7.3 rules, in steps of the resolution (one count, or the
+#: ``gyro_deg`` column's step): where the others agree to a few counts their MAD is
+#: lumpy (see ``ROUND_FLOOR_STEPS``).
+SPREAD_FLOOR_STEPS: float = 10.0
+
+
+def _design(x_deg: np.ndarray, harmonic: bool) -> np.ndarray:
+    """The columns of the condition model at the angles ``x_deg``: 1 and the angle (in
+    turns), with cos θ and sin θ where ``harmonic``."""
+    x = np.asarray(x_deg, float)
+    cols = [np.ones_like(x), x / 360.0]
+    if harmonic:
+        cols += [np.cos(np.radians(x)), np.sin(np.radians(x))]
+    return np.column_stack(cols)
+
+
+def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: float = 0.0,
+                    drift_arcsec=None) -> list[tuple[int, float, float, float]]:
+    """The condition rule of readings taken once per position (7.1, 7.6, 7.7): each
+    reading against the least-squares model in the table angle θ that the condition's
+    other readings draw (leave one out). The readings of one rate or orientation differ
+    from the reference's by a scale-factor change and a drift over the turn's time, both
+    in proportion to the angle (a line), and by the tilted sensing axis's Earth-rate
+    coupling, which a slow turn integrates into a first harmonic of θ (``coupling.py``);
+    the model is the line, and with ``HARMONIC_MIN`` others or more the line and cos θ,
+    sin θ. The position's own error is taken out beforehand where a reference is read
+    (``d`` = reading less the reference round's median at its angle,
+    :func:`_line_outliers`).
+
+    The candidate is the reading without which the others' residuals are smallest (a
+    typo pulls the fit and widens the others' spread); it is set aside when
+    |d_j − fit(θ_j)| > max(``SPREAD_Z`` · s · √(1 + h_j), ``DRIFT_Z`` · drift_j,
+    ``floor_arcsec``), s =
+    max(1.4826 · MAD of the others' residuals · √(n/(n − p)), ``scale_min_arcsec``) over
+    the n others and p terms, h_j = x_jᵀ(XᵀX)⁻¹x_j (the fit's own uncertainty at θ_j),
+    drift_j the drift the instrument may accumulate from zeroing to reading j
+    (``drift_arcsec``, :func:`_line_outliers`: the draft's zero-stability bound times
+    time_s; 0 where not given): a slow turn's reading wanders with the bias over minutes
+    (1 °/s: 6 min for 360°) beyond what the other readings' spread shows; the rule then runs again on the others while ``LINE_MIN`` − 1 remain. Returns
+    (index, departure ″, threshold ″, s ″) of each reading set aside, in that order.
+
+    >>> x = np.arange(30.0, 361.0, 30.0)
+    >>> d = 0.002 * x + np.array([0.1, -0.1, 0.0, 0.05, -0.05, 0.1, 0.0, -0.1, 0.05, 0.0,
+    ...                           -0.05, 0.1])
+    >>> line_departures(x, d, 0.47)
+    []
+    >>> d[4] += 1.5
+    >>> [(i, round(dev, 2)) for i, dev, _, _ in line_departures(x, d, 0.47)]
+    [(4, 1.42)]
+    """
+    x, d = np.asarray(x_deg, float), np.asarray(d_arcsec, float)
+    drift = np.zeros(d.size) if drift_arcsec is None else np.asarray(drift_arcsec, float)
+    idx = np.arange(d.size)
+    out = []
+    while idx.size >= LINE_MIN:
+        X = _design(x, idx.size - 1 >= HARMONIC_MIN)
+        best = None
+        for j in range(idx.size):
+            rest = np.delete(idx, j)
+            coef, *_ = np.linalg.lstsq(X[rest], d[rest], rcond=None)
+            e = d[rest] - X[rest] @ coef
+            score = float(np.max(np.abs(e - np.median(e))))
+            if best is None or score < best[0]:
+                best = (score, j, rest, e, coef)
+        _, j, rest, e, coef = best
+        n, p, k = rest.size, X.shape[1], idx[j]
+        s = max(1.4826 * float(np.median(np.abs(e - np.median(e)))) * math.sqrt(n / (n - p)),
+                float(scale_min_arcsec))
+        h = float(X[k] @ np.linalg.pinv(X[rest].T @ X[rest]) @ X[k])
+        dev = float(d[k] - X[k] @ coef)
+        thr = max(SPREAD_Z * s * math.sqrt(1.0 + h), DRIFT_Z * float(drift[k]),
+                  float(floor_arcsec))
+        if not abs(dev) > thr:
+            break
+        out.append((int(k), dev, thr, s))
+        idx = rest
+    return out
+
+
+def allowed_drift_arcsec_per_s(protocol) -> float:
+    """The drift rate a reading may carry from zeroing to reading, ″/s: the draft's
+    zero-stability bound (``[annex_a] zero_stability_dph``, A.4.3: 0.005 °/h), 0 where the
+    protocol has none."""
+    a = getattr(protocol, "annex_a", None)
+    v = getattr(a, "zero_stability_dph", None) if a is not None else None
+    return float(dph_to_arcsec_s(float(v))) if v else 0.0
+
+
+def reference_rounds(work: pd.DataFrame, protocol):
+    """The reference condition's rounds (7.4 at its rate and orientation, every round read
+    in at least ``PER_ROUND_MIN`` series): their table angles (median of ``table_deg``,
+    °), the median of each round's r (″) and the pooled scale s = 1.4826 · median of every
+    reading's |r − its round's median| (″); None where the file has no such reference."""
+    it = getattr(protocol, "angle_deviation", None)
+    if it is None:
+        return None
+    g = work[(work["test"] == "angle_deviation")
+             & np.isclose(work["rate_dps"].to_numpy(float), it.rate_dps)
+             & (work["orientation"] == it.orientation)]
+    if not len(g):
+        return None
+    per = g.groupby("round", sort=True)
+    if per.size().min() < PER_ROUND_MIN:
+        return None
+    med = per["_r"].transform("median").to_numpy(float)
+    return (per["table_deg"].median().to_numpy(float), per["_r"].median().to_numpy(float),
+            1.4826 * float(np.median(np.abs(g["_r"].to_numpy(float) - med))),
+            float(it.position_tolerance_deg))
+
+
+def _line_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: float, ref,
+                   drift_arcsec_per_s: float = 0.0) -> list[Finding]:
+    """The readings of a condition read once per position that break the condition rule
+    (:func:`line_departures`), one finding each. Where every reading's angle is a
+    reference round's (``ref``, :func:`reference_rounds`), each is taken less that round's
+    median (the position's own error, common to every rate and orientation) and the
+    scale is never below the reference's pooled one."""
+    r = g["_r"].to_numpy(float)
+    x = g["table_deg"].to_numpy(float)
+    d, s_min, less = r, 0.0, ""
+    if ref is not None:
+        ang, med, s_ref, tol = ref
+        j = np.abs(x[:, None] - ang[None, :]).argmin(axis=1)
+        if np.all(np.abs(ang[j] - x) <= tol):
+            d, s_min = r - med[j], s_ref
+            less = ", each reading less the 7.4 reference round's median at its angle"
+    drift = drift_arcsec_per_s * np.abs(g["time_s"].to_numpy(float))
+    drift = np.where(np.isfinite(drift), drift, 0.0)
+    found = [(i, f"the fit its condition's other readings draw{less}", dev, thr,
+              f"; s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
+             for i, dev, thr, s in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
+                                                   drift)]
+    return _departures(g, found, what, file, test, _LINE_RULE, k_ref)
+
+
+_LINE_RULE = (f"|d − line(others)| > max({SPREAD_Z:g} · s · √(1 + h), {SPREAD_FLOOR_STEPS:g} "
+              "steps of resolution), d = r less the 7.4 reference round's median at the same "
+              "angle (r where none), line = least squares in the table angle through the "
+              "condition's other readings, s = max(1.4826 · MAD of their residuals · "
+              "√(n/(n − 2)), the reference's pooled s), h its leverage; r = indicated − table "
+              "angle, indicated = gyro_deg or gyro_counts / K_ref")
 
 
 def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
@@ -365,15 +560,22 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
     r = deg_to_arcsec(ind - np.where(is_zs, 0.0, table))
     work = df.assign(_r=r, _col=col)
     work = work[np.isfinite(work["_r"]) & ~work["line"].isin(skip)]
+    rot = work[work["test"].isin(ROTATION_TESTS)]
+    ref = reference_rounds(rot, protocol)
+    drift_rate = allowed_drift_arcsec_per_s(protocol)
+    deg_step = _deg_step(rot[rot["_col"] == "gyro_deg"]) if (rot["_col"] == "gyro_deg").any() \
+        else 0.0
     out = []
     keys = ["test", "rate_dps", "orientation"]
-    for key, g in work[work["test"].isin(ROTATION_TESTS)].groupby(keys, sort=False):
+    for key, g in rot.groupby(keys, sort=False):
         what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
-        per_round = g.groupby("round", sort=False)
-        if per_round.size().min() >= PER_ROUND_MIN:
+        step = _resolution_arcsec(g, k_ref, deg_step)
+        if g.groupby("round", sort=False).size().min() >= PER_ROUND_MIN:
             # many series: each reading against the other series of its round (an error
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
-            out += _round_outliers(g, key[0], what, file, k_ref)
+            out += _round_outliers(g, key[0], what, file, k_ref, step)
+        elif len(g) >= LINE_MIN:
+            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate)
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
@@ -381,14 +583,23 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
         if len(g) < ZS_NEIGHBOUR_MIN:
             out += _group_outliers(g, "zero_stability", what, file, k_ref)
         else:
-            out += _rest_outliers(g, what, file, k_ref)
+            out += _rest_outliers(g, what, file, k_ref, _resolution_arcsec(g, k_ref, deg_step),
+                                  drift_rate)
     return out
 
 
 #: A 7.3 series of at least this many readings is screened against each reading's neighbours.
 ZS_NEIGHBOUR_MIN: int = 4
 
-_REST_RULE = (f"|e − median(e)| > max({ROBUST_Z:g} · 1.4826 · MAD(e), {ANGLE_FLOOR_ARCSEC:g}″), "
+#: Robust z of the 7.3 rule (:func:`_rest_spread`), whose threshold is also never below
+#: ``DRIFT_Z`` times the residual the draft's zero-stability bound allows between
+#: neighbours (0.005 °/h × 300 s / 2 = 0.75″): a clean rest's residuals reached 10.6 times
+#: their MAD scale where the bias wandered (docs/draft-readings.md, "Screening").
+REST_Z: float = 5.0
+
+_REST_RULE = (f"|e − median(e)| > max({REST_Z:g} · 1.4826 · MAD(e), {DRIFT_Z:g} · the "
+              "zero-stability bound × spacing / 2, "
+              f"{SPREAD_FLOOR_STEPS:g} steps of resolution), "
               "e = indicated angle − the line through its two neighbours in time (the two "
               "nearest at the ends), the reading without which the others' e are smallest "
               "against the others' median and threshold; then again on the others")
@@ -399,14 +610,16 @@ def rest_residuals(t_s: np.ndarray, r_arcsec: np.ndarray) -> np.ndarray:
     nearest, extrapolated, for the first and last), ″. A drift, linear or slowly curving,
     leaves them near zero; a typo of d moves its own residual by d and its neighbours' by
     about d/2 (2d at an end extrapolated through it). Where the spacing is uneven (a
-    reading set aside leaves a gap) a residual is divided by √(its prediction's
-    random-walk variance / that on an even grid of the median spacing): 1 on an even grid.
+    reading set aside leaves a gap) and at the ends a residual is divided by √(its
+    prediction's random-walk variance / an inner one's on an even grid of the median
+    spacing): 1 inside an even grid, 2 at its ends (x0 − 2x1 + x2: four times the variance
+    of an inner residual, for a random walk as for white noise).
 
     ``t_s`` strictly increasing, at least 3 readings.
 
     >>> e = rest_residuals(np.array([0., 300, 600, 900, 1200]), np.array([0., 1, 2, 8, 4]))
     >>> [round(float(x), 3) for x in e]
-    [0.0, 0.0, -2.5, 5.0, -10.0]
+    [0.0, 0.0, -2.5, 5.0, -5.0]
     """
     t, x = np.asarray(t_s, float), np.asarray(r_arcsec, float)
     n = t.size
@@ -420,38 +633,48 @@ def rest_residuals(t_s: np.ndarray, r_arcsec: np.ndarray) -> np.ndarray:
     for i, j, k in ((0, 1, 2), (n - 1, n - 2, n - 3)):
         e[i] = x[i] - (x[j] + (x[j] - x[k]) * (t[i] - t[j]) / (t[j] - t[k]))
         ga, gb = abs(t[i] - t[j]), abs(t[j] - t[k])
-        f[i] = (ga + ga * ga / gb) / (2.0 * h)
-    # relative to an even grid of the series' median spacing (1 there, at the ends too):
-    # a gap a reading set aside leaves widens its neighbours' predictions
+        f[i] = (ga + ga * ga / gb) / (h / 2.0)
+    # relative to an inner residual on an even grid of the series' median spacing (1 there;
+    # 4 at an end, whose extrapolation x0 − 2x1 + x2 has four times the variance for a random
+    # walk and for white noise alike, so an end is judged on the inner readings' scale): a
+    # gap a reading set aside leaves widens its neighbours' predictions
     return e / np.sqrt(f)
 
 
-def _rest_spread(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """The residuals (:func:`rest_residuals`), their median and the rule's threshold."""
+def _rest_spread(t: np.ndarray, x: np.ndarray, floor_arcsec: float
+                 ) -> tuple[np.ndarray, float, float]:
+    """The residuals (:func:`rest_residuals`), their median and the rule's threshold:
+    ``REST_Z`` · 1.4826 · MAD of the residuals, never below ``floor_arcsec`` (steps of the
+    resolution, or the drift the zero-stability bound allows: :func:`_rest_outliers`)."""
     e = rest_residuals(t, x)
     med = float(np.median(e))
-    return e, med, max(ROBUST_Z * 1.4826 * float(np.median(np.abs(e - med))),
-                       ANGLE_FLOOR_ARCSEC)
+    return e, med, max(REST_Z * 1.4826 * float(np.median(np.abs(e - med))),
+                       float(floor_arcsec))
 
 
-def _off_line(t: np.ndarray, x: np.ndarray, tj: float, xj: float) -> tuple[float, float]:
+def _off_line(t: np.ndarray, x: np.ndarray, tj: float, xj: float
+              ) -> tuple[float, float, float]:
     """A reading at ``tj`` less the line through its neighbours among ``t`` (the two
-    nearest, extrapolated, beyond them), ″, and the same scaled as :func:`rest_residuals`
-    scales."""
+    nearest, extrapolated, beyond them), ″, the same scaled as :func:`rest_residuals`
+    scales, and how much wider its gaps make the prediction than the even grid's (√ of the
+    variance ratio: 1 on the grid; a reading beside one set aside, more)."""
     h = float(np.median(np.diff(t)))
     k = int(np.searchsorted(t, tj))
     if 0 < k < t.size:
         i, j = k - 1, k
         a, b = tj - t[i], t[j] - tj
         d = xj - (x[i] * b + x[j] * a) / (a + b)
-        return d, d / math.sqrt((a * b / (a + b)) / (h / 2.0))
+        f = (a * b / (a + b)) / (h / 2.0)
+        return d, d / math.sqrt(f), math.sqrt(max(f, 1.0))
     i, j = (0, 1) if k == 0 else (t.size - 1, t.size - 2)
     a, b = abs(tj - t[i]), abs(t[i] - t[j])
     d = xj - (x[i] + (x[i] - x[j]) * (tj - t[i]) / (t[i] - t[j]))
-    return d, d / math.sqrt((a + a * a / b) / (2.0 * h))
+    f = (a + a * a / b) / (h / 2.0)
+    return d, d / math.sqrt(f), math.sqrt(max(f / 4.0, 1.0))
 
 
-def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
+def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref, step: float,
+                   drift_arcsec_per_s: float = 0.0) -> list[Finding]:
     """7.3 readings of one series off the path their neighbours draw (module docstring).
 
     The candidate is the reading without which the others' residuals are smallest (a typo
@@ -465,17 +688,23 @@ def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
     if np.any(np.diff(t) <= 0):              # repeated times: no neighbours to draw a line
         return _group_outliers(g, "zero_stability", what, file, k_ref)
     idx = np.arange(len(g))
+    # the bias change the draft's A.4.3 bound allows moves an inner residual by about
+    # Δb · h / 2 (h the spacing): DRIFT_Z such moves are the instrument's, not a typo
+    drift = DRIFT_Z * drift_arcsec_per_s * float(np.median(np.diff(t))) / 2.0
     out = []
     while idx.size >= ZS_NEIGHBOUR_MIN:
         best = None
         for j in range(idx.size):
             rest = np.delete(idx, j)
-            er, mr, tr = _rest_spread(t[rest], x[rest])
+            er, mr, tr = _rest_spread(t[rest], x[rest], max(SPREAD_FLOOR_STEPS * step, drift))
             score = float(np.max(np.abs(er - mr)))
             if best is None or score < best[0]:
                 best = (score, j, rest, mr, tr)
         _, j, rest, med, thr = best
-        raw, dev = _off_line(t[rest], x[rest], t[idx[j]], x[idx[j]])
+        raw, dev, wider = _off_line(t[rest], x[rest], t[idx[j]], x[idx[j]])
+        # a bias change moves a residual across a gap (a reading set aside) more: the
+        # allowed drift grows with the prediction's spread
+        thr = max(thr, drift * wider)
         if not abs(dev - med) > thr:
             break
         row = g.iloc[idx[j]]
@@ -502,17 +731,15 @@ def _outlier_finding(row, message: str, what: str, file, test: str, rule: str,
 
 
 def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:
+    """The median rule of a group too small for its own spread (fewer than
+    ``LINE_MIN`` readings of a condition read once per position; a 7.3 series of fewer than
+    ``ZS_NEIGHBOUR_MIN``, or with repeated times)."""
     if len(g) < 3:
         return []
-    idx, med, thr = _outliers(g["_r"].to_numpy())
-    out = []
-    for i in idx:
-        row = g.iloc[i]
-        out.append(_outlier_finding(
-            row, f"indicated − table angle {row['_r']:.4g}″ departs from the condition's "
-            f"median {med:.3g}″ by {abs(row['_r'] - med):.4g}″ (> {thr:.3g}″)",
-            what, file, test, _ANGLE_RULE, k_ref))
-    return out
+    r = g["_r"].to_numpy(float)
+    idx, med, thr = _outliers(r)
+    return _departures(g, [(i, f"the condition's median {med:.3g}″", r[i] - med, thr, "")
+                           for i in idx], what, file, test, _ANGLE_RULE, k_ref)
 
 
 def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
@@ -684,8 +911,11 @@ def apply_findings(readings: Readings, findings: list[Finding], protocol=None
                     & ((left["rate_dps"] == row["rate_dps"])
                        | (left["rate_dps"].isna() & pd.isna(row["rate_dps"])))]
         if row["test"] in ROTATION_TESTS and not len(same):
-            raise GonioError(f"{f.message}; no reading of this round is left, the item cannot "
-                             "stand without it", file=readings.path, line=line, column=f.column)
+            # the why first: a long finding is cut on the command line's one line
+            raise GonioError(f"{CLAUSES.get(row['test'], '')} reading set aside, and no other "
+                             f"reading of its round is left: the item cannot stand without "
+                             f"it; {f.message}", file=readings.path, line=line,
+                             column=f.column)
     ex = df.loc[mask, cols].copy()
     ex["reason"] = [f"{aside[int(x)].message} [{aside[int(x)].code}]" for x in ex["line"]]
     kept = Readings(left.reset_index(drop=True), dict(readings.metadata), readings.path)

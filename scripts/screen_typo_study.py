@@ -1,0 +1,129 @@
+"""The optical draft's screening on clean sessions and on sessions with one typo planted.
+
+Sessions of the built-in programme with every item (``gonio validate --all-items``'
+protocol, at the study's 100 Hz), on the study's benches and cases, with the validation's
+trial seeds (``study.trial_seed(seed, case, i)``). For each session:
+
+* **clean**: the whole screening (``screen.screen``); every reading set aside or refused is
+  a false finding (the bench wrote no typo);
+* **sweep** (the first ``--sweep-trials`` trials of each case): for each of 7.1, 7.3, 7.6 and
+  7.7 and each size (0.3″, 0.5″, 1″, 2″, 5″) one reading drawn at random is moved by the size
+  (sign drawn; a whole number of counts for ``gyro_counts``, the size itself for
+  ``gyro_deg``) and the indicated-angle rule is run on that test's readings and 7.4's
+  reference (K_ref of the clean file): caught = the planted line is found; "other" = a
+  reading of the same test found that the clean file did not.
+
+    python scripts/screen_typo_study.py --seed 20261202 --trials 25 --sweep-trials 10 \\
+        [--benches rlg,fog] [--cases default,typeb,worst,drift] [--cache DIR]
+
+``--cache DIR`` keeps each simulated session (``DIR/bench_case_i.pkl``) and reads it back
+on a second run. Prints the counts; docs/draft-readings.md ("Screening") quotes them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import pickle
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.readings import Readings
+from gonio.specs.ogam_draft.screen import _indicated_rule, reference_scale_factor, screen
+from gonio.specs.ogam_draft.study import (case_bench, study_bench, study_protocol,
+                                          trial_bench, trial_seed)
+from gonio.units import ARCSEC_PER_DEG
+
+SIZES = (0.3, 0.5, 1.0, 2.0, 5.0)
+TESTS = ("scale_factor", "zero_stability", "rate_consistency", "pointing_consistency")
+
+
+def session(protocol, bench_name: str, case: str, seed: int, i: int, cache):
+    f = Path(cache) / f"{bench_name}_{case}_{i}.pkl" if cache else None
+    if f is not None and f.exists():
+        return pickle.loads(f.read_bytes())
+    b0 = case_bench(case, study_bench(load_bench(bench_name), 100.0), protocol)
+    s = trial_seed(seed, case, i)
+    res = run_session(protocol, trial_bench(case, b0, protocol, s), seed=s)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    out = (df, dict(res.metadata))
+    if f is not None:
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_bytes(pickle.dumps(out))
+    return out
+
+
+def sweep(df, md, protocol, name: str, caught, planted, other) -> None:
+    rng = np.random.default_rng([20261201, zlib.crc32(name.encode())])
+    k = float(md["nominal_scale_factor_counts_per_deg"])
+    k_ref = reference_scale_factor(df, md)
+    bench = name.split("_")[0]
+    for test in TESTS:
+        rows = np.flatnonzero((df["test"] == test).to_numpy())
+        sub0 = df[df["test"].isin([test, "angle_deviation"])]
+        before = {x.line for x in _indicated_rule(sub0, protocol, None, k_ref, set())
+                  if x.test == test}
+        for size in SIZES:
+            i, sgn = int(rng.choice(rows)), int(rng.choice([-1, 1]))
+            d2 = df.copy()
+            if np.isfinite(d2.at[i, "gyro_deg"]):
+                d2.at[i, "gyro_deg"] += sgn * size / ARCSEC_PER_DEG
+            else:
+                d2.at[i, "gyro_counts"] += sgn * round(size / ARCSEC_PER_DEG * k)
+            sub = d2[d2["test"].isin([test, "angle_deviation"])]
+            lines = {x.line for x in _indicated_rule(sub, protocol, None, k_ref, set())
+                     if x.test == test}
+            key = (bench, test, size)
+            planted[key] += 1
+            caught[key] += int(df.at[i, "line"]) in lines
+            other[key] += bool(lines - {int(df.at[i, "line"])} - before)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, default=20261202)
+    ap.add_argument("--trials", type=int, default=25)
+    ap.add_argument("--sweep-trials", type=int, default=10)
+    ap.add_argument("--benches", default="rlg,fog")
+    ap.add_argument("--cases", default="default,typeb,worst,drift")
+    ap.add_argument("--cache", default=None)
+    a = ap.parse_args(argv)
+    protocol = study_protocol("ogam-draft", all_items=True)
+    n = collections.Counter()
+    false = collections.Counter()
+    named = []
+    caught, planted, other = (collections.Counter() for _ in range(3))
+    t0 = time.time()
+    for bench in a.benches.split(","):
+        for case in a.cases.split(","):
+            for i in range(a.trials):
+                df, md = session(protocol, bench, case, a.seed, i, a.cache)
+                n[bench] += 1
+                fd = [x for x in screen(Readings(df, md, None), protocol)
+                      if x.action != "flagged"]
+                false[bench] += len(fd)
+                named += [f"  {bench} {case} trial {i}: line {x.line}: {x.message}" for x in fd]
+                if i < a.sweep_trials:
+                    sweep(df, md, protocol, f"{bench}_{case}_{i}", caught, planted, other)
+    print(f"seed {a.seed}, cases {a.cases}, trials 0–{a.trials - 1} "
+          f"(sweep: 0–{a.sweep_trials - 1}), {time.time() - t0:.0f} s")
+    for bench in n:
+        print(f"clean {bench}: {n[bench]} sessions, {false[bench]} readings set aside or refused")
+    print("\n".join(named))
+    for bench in n:
+        for test in TESTS:
+            cells = []
+            for s in SIZES:
+                k = (bench, test, s)
+                cells.append(f"{s:g}″ {caught[k]}/{planted[k]}"
+                             + (f" (+{other[k]} other)" if other[k] else ""))
+            print(f"{bench} {test}: " + ", ".join(cells))
+
+
+if __name__ == "__main__":
+    main()
