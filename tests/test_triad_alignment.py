@@ -372,14 +372,14 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
         pages.append((tmp_path / name).read_bytes())
     page = pages[0]
     assert pages[0] == pages[1] and b"<svg" in page
-    # the page shows M with the certified item's U (k = t(ν_eff) of the fit and the table),
-    # U to 2 significant digits, value to U's decimal place
+    # the page shows M as the certified item states it (its bound-condition interval, the
+    # statement rule's digits)
     from gonio.specs.triad_alignment.calibration import calibrate
-    from gonio.specs.triad_alignment.pages import value_with_u
+    from gonio.specs.triad_alignment.pages import certified_cell, value_with_u
     item = calibrate(out / "readings.csv").items["M_xx"]
     assert item.uncertainty.u_c == pytest.approx(u[0][0], rel=1e-9)
-    cell = value_with_u(m[0][0], item.uncertainty.U)
-    assert cell.encode() in page
+    cell = certified_cell(item)
+    assert item.uncertainty.k is None and cell.encode() in page
     assert value_with_u(49.99371, 0.0028) == "49.9937 ± 0.0028"
     bad = tmp_path / "bad.csv"
     bad.write_text((out / "readings.csv").read_text().replace("# format: gonio-triad-readings/1",

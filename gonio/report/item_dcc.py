@@ -164,8 +164,8 @@ def matrix_result(results, name: str, keys: list[str], items: dict,
                                                              for n in ns))
             element(mu, "si:coverageProbabilityXMLList", " ".join(stated_p(p) for p in ps))
     elif all(n["interval"] is not None and n["interval"]["u"] for n in ns):
-        # every element stated by its coverage interval alone (the triad's bound-condition
-        # M, S, L): the list's coverage intervals, as each item's own result states it
+        # every element stated by its coverage interval alone: the list's coverage
+        # intervals, as each item's own result states it
         ps = [(_p(items[k]) if _p(items[k]) is not None else p_default) for k in keys]
         if all(p is not None for p in ps):
             mu = element(element(rl, "si:measurementUncertaintyUnivariateXMLList"),

@@ -361,8 +361,13 @@ def dcc_translator(result, content_fn):
 
     decided = [(k, it["conformity"]) for k, it in res.get("items", {}).items()
                if it.get("conformity")]
+    phrases_zh = content_field(data, "PHRASES_ZH")
+
+    def title_zh(k: str) -> str:
+        """An item's Chinese title: the specification's TITLES_ZH, else its phrases."""
+        return titles.get(k) or reason_text(res["items"][k]["title"], labels("zh"), phrases_zh)
     band = {lg: interval_band_note(decided, labels(lg), lambda k: (
-        titles.get(k, res["items"][k]["title"]) if lg == "zh" else res["items"][k]["title"]),
+        title_zh(k) if lg == "zh" else res["items"][k]["title"]),
         lambda k: band_unit(res["items"][k])) for lg in ("en", "zh")}
     if band["en"]:
         extra[band["en"]] = band["zh"]

@@ -155,9 +155,9 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
 #: the kinds of interval an item can be stated by, in the legend's order
 INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "own", "upper")
 
-#: ``k_source`` prefix of a bound-condition statement (the triad's M, S, L, K: the rate
-#: table's errors at their bounds plus k·u of the rest), :func:`interval_kind` "bound".
-K_SOURCE_BOUND_PREFIX = "bound condition"
+#: ``k_source`` prefix of a bound-condition statement (an item whose equipment errors are
+#: taken at their bounds, plus k·u of the rest), :func:`interval_kind` "bound".
+K_SOURCE_BOUND_PREFIX = "U = a + k·u"
 
 
 def interval_kind(item: dict) -> str | None:
@@ -165,8 +165,8 @@ def interval_kind(item: dict) -> str | None:
     its own ``uncertainty.k_source`` (decided once, in the result): "chi2" (a standard
     deviation's χ²), "range" (a half range's normal range), "belt" (a bias-corrected range's
     confidence belt), "max_abs" (the extreme of magnitudes max_i |x_i|), "sel_max" (the
-    largest σ_i less its selection bias), "bound" (value ± (a + k·u): the table's errors at
-    their bounds plus k·u of the rest, the triad's), "own" (its own distribution: Monte Carlo, folded
+    largest σ_i less its selection bias), "bound" (value ± (a + k·u): the equipment's errors
+    at their bounds plus k·u of the rest), "own" (its own distribution: Monte Carlo, folded
     normal, pivot, outcome distribution), "upper" (a non-negative item's upper bound), or
     None (value ± U, or not measured).
 

@@ -182,6 +182,11 @@ STATEMENTS = {
 }
 
 
+#: ``k_source`` of a bound-condition statement: a formula, no words (it is quoted in every
+#: language's conformity texts); its parts in ``details.bound_condition``. The shared
+#: legend recognises it (``gonio.report.stated.K_SOURCE_BOUND_PREFIX``).
+K_SOURCE_BOUND = "U = a + k·u"
+
 #: The label of every reading results.json keeps beside the certified statement.
 NOT_CERTIFIED = "not certified"
 
@@ -246,11 +251,7 @@ def certified(unc: Uncertainty, bc: dict, statement: str = "bound") -> Uncertain
     if statement != "bound":
         return unc
     return Uncertainty(list(unc.components), unc.u_c, bc["U"], None, bc["nu_rest"],
-                       unc.monte_carlo, COVERAGE,
-                       f"bound condition: U = a_table + k·u_rest = {bc['a_table']:.4g} + "
-                       f"{bc['k_rest']:.3g} × {bc['u_rest']:.4g} (the table's errors at their "
-                       "bounds, worst combination; at least 95.45 % at every table error "
-                       "within them)", tuple(bc["interval"]),
+                       unc.monte_carlo, COVERAGE, K_SOURCE_BOUND, tuple(bc["interval"]),
                        u_c_of="the JCGM 100 budget (the table's errors as distributions); "
                               "the bound-condition interval is the statement")
 

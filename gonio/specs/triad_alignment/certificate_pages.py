@@ -131,7 +131,9 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                              rate=display("sig3", tb["rate_u_rel"]),
                              bound=display("sig3", math.degrees(tb["orientation_u_rad"])
                                            * math.sqrt(3.0)))]))
-    legend = interval_legend(items, L)      # what each item's interval is (the shared legend)
+    # what each item's interval is (the shared legend), its clauses in the page's language
+    legend = interval_legend({k: {**it, "clause": _why(str(it.get("clause") or ""), L)}
+                              for k, it in items.items()}, L)
     if legend:
         out.append(Block("p", [legend]))
     if (items["M_xx"].get("details") or {}).get("bound_condition"):
