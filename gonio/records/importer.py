@@ -716,6 +716,15 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                               env, lab_stds, tsha, tsize, tname, res_path, inputs, options)
 
 
+def import_day() -> _dt.date:
+    """The calibration date of an imported run whose readings give no ``date`` (so neither
+    does its results.json, which the recomputation checks): the day of the import, UTC as the
+    records' times — never a file's modification time, which anyone can set (``touch -d``)
+    and which would choose the standards and the table calibration in force on that day
+    (docs/records.md, importing an output folder)."""
+    return services.utcnow().date()
+
+
 def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,
                    proto, psha, psize, lab, lsha, lsize, env, lab_stds, tsha, tsize, tname,
                    res_path, inputs=(), options=None) -> int:
@@ -737,11 +746,13 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
                 s.add(Blob(sha256=sha, size=size))
                 s.flush()
         inst = _instrument(s, meta, key, customer, actor)
-        day = day or _dt.date.fromtimestamp(res_path.stat().st_mtime)
-        try:
-            services.plausible_dates(day, None)
-        except GonioError as exc:
-            raise GonioError(exc.message, file=res_path, key="metadata.date") from None
+        dated = "the readings' date" if day else "the import day (the readings give no date)"
+        if day:     # checked before the recomputation too; the import day is today
+            try:
+                services.plausible_dates(day, None)
+            except GonioError as exc:
+                raise GonioError(exc.message, file=res_path, key="metadata.date") from None
+        day = day or import_day()
         cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
                           readings_name=rd.name,
                           protocol=services.text(proto.name if proto else "", "protocol",
@@ -762,7 +773,7 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
         services.audit(s, actor, "import", "calibration", cal.id, None,
                        dict(services.state(cal), folder=str(folder), os_user=os_user,
                             standards=services.standard_names(s, cal.id),
-                            options=dict(options or {}),
+                            options=dict(options or {}), date_from=dated,
                             inputs={n: sha for n, sha, _ in inputs}))
         for name, sha, _ in inputs:     # the files the readings and the options name, kept
             s.add(CalibrationFile(calibration_id=cal.id, name=name, sha256=sha))
