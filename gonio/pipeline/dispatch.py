@@ -164,9 +164,9 @@ def unread_columns(spec: Specification, readings) -> list[Finding]:
 
 
 def named_files(spec, readings) -> list[Path]:
-    """The files the readings name as part of their data (``spec.named_inputs``: a triad's
-    thermal readings, the optical static record) that exist; [] for a specification that
-    names none. A named file that is missing is the specification's own refusal."""
+    """The files the readings name as part of their data (``spec.named_inputs``: a second
+    readings file, a static record) that exist; [] for a specification that names none. A
+    named file that is missing is the specification's own refusal."""
     if spec.named_inputs is None:
         return []
     return [Path(p) for p in spec.named_inputs(readings) if Path(p).is_file()]
@@ -176,8 +176,8 @@ def mark_provenance(result, readings, named=()) -> None:
     """Set ``result.provenance`` from the readings' own metadata and that of every file they
     name as part of their data (``named``; :func:`gonio.formats.provenance.readings_provenance`):
     readings from the virtual bench are marked virtual on every output whatever the
-    laboratory file says, also where only a named file (a thermal programme) is the
-    bench's; nothing turns it off."""
+    laboratory file says, also where only a named file is the bench's; nothing turns it
+    off."""
     result.provenance = readings_provenance(readings, named)
 
 
