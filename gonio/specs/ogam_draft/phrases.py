@@ -157,6 +157,14 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
     (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the round's median "
      r"(\S+)″ by (\S+)″ \(> (\S+)″\)",
      "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该测回的中位数 {4}″ 达 {5}″（> {6}″）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the fit its condition's other readings draw, each reading less the 7\.4 reference round's median at its angle by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\) \(K_ref = (\S+) counts/° from the other readings\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件其余读数的拟合（各读数减去 7.4 参考测回在同一角位置的中位数） 达 {4}″（> {5}″；其余读数 s = {6}″，允许漂移 {7}″；K_ref = {8} 脉冲数/(°)，由其余读数求得）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the fit its condition's other readings draw, each reading less the 7\.4 reference round's median at its angle by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件其余读数的拟合（各读数减去 7.4 参考测回在同一角位置的中位数） 达 {4}″（> {5}″；其余读数 s = {6}″，允许漂移 {7}″）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the fit its condition's other readings draw by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\) \(K_ref = (\S+) counts/° from the other readings\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件其余读数的拟合 达 {4}″（> {5}″；其余读数 s = {6}″，允许漂移 {7}″；K_ref = {8} 脉冲数/(°)，由其余读数求得）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the fit its condition's other readings draw by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件其余读数的拟合 达 {4}″（> {5}″；其余读数 s = {6}″，允许漂移 {7}″）"),
     (r"zero_stability \(7\.3\) series (\d+): (\d+) of the protocol's (\d+) readings (\S+) s "
      r"apart; round\(s\) (.+) missing; B_s rests on the (\d+) readings read, T = (\S+) s "
      r"from the first to the last",
