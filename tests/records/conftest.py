@@ -149,6 +149,21 @@ def people(store):
     return make_people(store)
 
 
+@pytest.fixture(autouse=True)
+def pipeline_memo(request, monkeypatch):
+    """The records' pipeline call behind an in-process memo keyed by the SHA-256 of every
+    input (tests/records/pipeline_memo.py): an import computes its folder's result again, and
+    these tests import the same folders many times. ``@pytest.mark.real_pipeline``: without."""
+    if request.node.get_closest_marker("real_pipeline"):
+        return
+    from gonio.records import compute
+
+    from .pipeline_memo import memoised
+
+    real = getattr(compute.calibrate_folder, "__wrapped__", compute.calibrate_folder)
+    monkeypatch.setattr(compute, "calibrate_folder", memoised(real))
+
+
 @pytest.fixture(scope="session")
 def bench_readings(tmp_path_factory):
     """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual

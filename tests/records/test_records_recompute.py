@@ -25,6 +25,8 @@ from gonio.records.models import Calibration, CalibrationFile
 
 from .conftest import SMALL_PROTOCOL, make_people
 
+pytestmark = pytest.mark.real_pipeline      # the recomputation itself, each time
+
 SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
 #: the file each demo's readings name as part of their data (none for the rate specifications)
 NAMED = {"ogam-draft": "static_record.csv", "triad-alignment": "thermal.csv"}

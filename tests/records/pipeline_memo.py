@@ -1,0 +1,120 @@
+"""An in-process memo of the records' one pipeline call (:func:`gonio.records.compute.
+calibrate_folder`) for the records tests, where one test process computes the same result
+again and again: every ``gonio db import`` computes the imported folder's result again from
+the stored inputs (about one calibration each), and the tests import the same few folders
+(``computed_folder``, the small protocol's seed-1 readings) dozens of times.
+
+The pipeline is a pure, deterministic function of its inputs (same inputs, byte-identical
+output files, wherever ``out`` is). The memo's key is the SHA-256 of every input it reads:
+gonio's version, the specification's key, the options (and the bytes of a file an option
+names), record and gyro type, the readings' file name and the bytes of every file in the
+readings' folder (the readings and every file they name beside them, and more), the protocol,
+laboratory and table calibration files' names and bytes and those of the files beside each (a
+laboratory file may name a table calibration file by its name; a built-in protocol by its
+name), the ``GONIO_*`` environment variables and today's date. A changed byte in any of them is another key: the pipeline runs
+(``tests/records/test_pipeline_memo.py`` checks each). The folders the inputs lie in are not
+in the key (an import computes in a new temporary folder each time): a run whose output
+files name one of those folders, or ``out``, is not kept (:func:`names_a_folder`), and the
+test checks that the real pipeline gives the same bytes from other folders. A hit writes
+the stored output files into ``out`` (an empty or new folder; otherwise the pipeline runs)
+and returns what the pipeline returned; a failed run is never stored.
+
+Only the test suite uses it (the ``pipeline_memo`` fixture of ``tests/records/conftest.py``,
+on for every records test; ``@pytest.mark.real_pipeline`` runs a test without it): in
+production the same readings are never imported twice. It holds only what this process
+computed; nothing is written to disk."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+from pathlib import Path
+
+import gonio
+
+_MEMO: dict[str, tuple[dict[str, bytes], object]] = {}
+STATS = {"hits": 0, "misses": 0}
+
+
+def _add(h, tag: str, data: bytes) -> None:
+    h.update(tag.encode("utf-8") + b"\0" + len(data).to_bytes(8, "big") + data)
+
+
+def pipeline_key(readings, *, spec_key: str, protocol=None, lab=None, table_calibration=None,
+                 gyro_type=None, options=None, record=None) -> str:
+    """The SHA-256 of every input :func:`gonio.records.compute.calibrate_folder` reads."""
+    h = hashlib.sha256()
+    _add(h, "gonio", gonio.__version__.encode())
+    _add(h, "spec", str(spec_key).encode())
+    _add(h, "args", json.dumps({"gyro_type": gyro_type, "options": options, "record": record},
+                               sort_keys=True, default=repr).encode())
+    for name, v in sorted((options or {}).items()):      # an option naming a file: its bytes
+        if isinstance(v, (str, Path)) and len(str(v)) < 4096 and Path(v).is_file():
+            _add(h, "option-file:" + name, Path(v).read_bytes())
+    readings = Path(readings)
+    _add(h, "readings", readings.name.encode())
+    folder = readings.parent
+    for p in sorted(folder.rglob("*")):
+        if p.is_file():
+            _add(h, "file:" + p.relative_to(folder).as_posix(), p.read_bytes())
+    for name, f in (("protocol", protocol), ("lab", lab), ("table", table_calibration)):
+        if f is None:
+            _add(h, name, b"")
+        elif Path(f).is_file():
+            _add(h, name + ":" + Path(f).name, Path(f).read_bytes())
+            for q in sorted(Path(f).parent.iterdir()):   # the files beside it (a laboratory
+                if q.is_file() and q.stat().st_size < 2**24:   # file names its table file)
+                    _add(h, name + "-beside:" + q.name, q.read_bytes())
+        else:                                  # a built-in protocol's name
+            _add(h, name + "=" + str(f), b"")
+    env = {k: v for k, v in os.environ.items() if k.startswith("GONIO_")}
+    _add(h, "env", json.dumps(env, sort_keys=True).encode())
+    _add(h, "date", dt.date.today().isoformat().encode())
+    return h.hexdigest()
+
+
+def names_a_folder(files: dict[str, bytes], *paths) -> bool:
+    """Whether an output file names the folder of an input or of ``out`` (its text files;
+    a PDF renders the HTML's text): such an output depends on where the inputs were, which
+    the key leaves out (it hashes their names and bytes), so it is not kept."""
+    folders = {str(Path(p).resolve().parent) for p in paths if p is not None} | \
+              {str(Path(p).parent) for p in paths if p is not None}
+    folders |= {str(Path(paths[-1])), str(Path(paths[-1]).resolve())}
+    folders = {f.encode("utf-8") for f in folders if len(f) > 1}
+    return any(f in data for name, data in files.items() if not name.endswith(".pdf")
+               for f in folders)
+
+
+def memoised(real, memo: dict | None = None, stats: dict | None = None):
+    """``real`` (calibrate_folder's signature) behind the memo (this process's one, or
+    ``memo``; hits and misses counted in ``stats``)."""
+    memo = _MEMO if memo is None else memo
+    stats = STATS if stats is None else stats
+
+    def calibrate_folder(readings, out, *, spec_key, protocol=None, lab=None,
+                         table_calibration=None, gyro_type=None, options=None, record=None):
+        kw = dict(spec_key=spec_key, protocol=protocol, lab=lab,
+                  table_calibration=table_calibration, gyro_type=gyro_type, options=options,
+                  record=record)
+        out = Path(out)
+        if out.exists() and any(out.iterdir()):
+            return real(readings, out, **kw)             # not the case the memo knows
+        key = pipeline_key(readings, **kw)
+        if key in memo:
+            stats["hits"] += 1
+            files, returned = memo[key]
+            for name, data in files.items():
+                (out / name).parent.mkdir(parents=True, exist_ok=True)
+                (out / name).write_bytes(data)
+            return list(returned) if isinstance(returned, list) else returned
+        stats["misses"] += 1
+        returned = real(readings, out, **kw)
+        files = {p.relative_to(out).as_posix(): p.read_bytes()
+                 for p in sorted(out.rglob("*")) if p.is_file()}
+        if not names_a_folder(files, readings, protocol, lab, table_calibration, out):
+            memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
+        return returned
+    calibrate_folder.__wrapped__ = real
+    return calibrate_folder
