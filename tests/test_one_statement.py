@@ -87,8 +87,9 @@ def test_summary_has_no_second_statement(demo):
                 assert " ± " not in ln and "k = " not in ln, (key, ln)
                 iv = it["uncertainty"].get("interval")
                 # two-sided: JJF 7.2.6/7.2.7's outcome, or a signed quantity's interval (the
-                # triad's bound-condition statement of M, S, L, K)
-                if iv is not None and (iv[0] > 0 or not it.get("nonnegative")):
+                # triad's bound-condition statement of M, S, L, K); an interval from 0 (a
+                # magnitude's, e.g. the optical E's max |E_i|) is stated by its bound
+                if iv is not None and iv[0] != 0:
                     assert "interval [" in ln and "≤ " not in ln, (key, ln)
                 else:
                     assert "≤ " in ln, (key, ln)

@@ -119,12 +119,15 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str,
 
 def condition_text(v) -> str:
     """An environment condition (temperature, humidity) as every output states it: the
-    number as the laboratory file or the readings give it, to at most 6 significant digits
-    (the certificate's text; the DCC writes the same digits).
+    number as the readings' metadata give it (their text, trailing zeros and all: a logger's
+    "20.0" states its resolution), or the laboratory file's number to at most 6 significant
+    digits (the certificate's text; the DCC writes the same digits).
 
     >>> condition_text(20.1), condition_text(45.0), condition_text("22.50"), condition_text(20)
-    ('20.1', '45', '22.5', '20')
+    ('20.1', '45', '22.50', '20')
     """
+    if isinstance(v, str):
+        return v.strip()
     return f"{float(v):g}"
 
 
