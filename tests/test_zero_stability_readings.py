@@ -216,7 +216,8 @@ def test_cli_readings_file_states_the_chi_square_interval_alone(tmp_path):
     assert zs["details"]["estimates"]["model"] is None
     assert "no continuous record" in zs["details"]["stated_note"]
     html = (tmp_path / "o" / "certificate.html").read_text(encoding="utf-8")
-    assert "95 % interval (χ²" not in html and "≤\u00a0" in html and "p\u00a0≈" in html
+    assert "95 % interval (χ²" not in html
+    assert "≤\u00a0" in html and "p\u00a0=\u00a095" in html      # 95 %: chosen, "p = 95 %"
 
 
 def test_cli_validate_refuses_one_monte_carlo_trial(tmp_path):

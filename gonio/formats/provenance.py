@@ -74,7 +74,8 @@ def readings_provenance(path, named=()) -> dict:
     """:func:`provenance` of a readings file's or a stream's metadata
     (:func:`readings_metadata`), and of each file the readings name as part of their data
     (``named``: a triad's thermal readings, the optical static record): the calibration is
-    virtual when any file it reads is; ``evidence`` names another file's keys as
+    virtual when any file it reads is. Readings that say so themselves give their own
+    provenance; else the first virtual named file's, ``evidence`` naming its keys as
     ``file:key``.
 
     >>> import tempfile, pathlib
@@ -86,6 +87,8 @@ def readings_provenance(path, named=()) -> dict:
     (True, '3', ['th.csv:bench', 'th.csv:seed'])
     """
     out = provenance(readings_metadata(path))
+    if out["virtual"]:              # the readings say so themselves: their own evidence
+        return out
     for other in named:
         more = provenance(readings_metadata(other))
         if not more["virtual"]:

@@ -111,7 +111,8 @@ def lab_table_calibration(lab_d: dict | None, lab_file, metadata: dict,
     if given is not None:
         other = _sha256(Path(given), None, "--table-calibration")
         if other != sha:
-            raise GonioError(f"--table-calibration {given} (SHA-256 {other[:16]}…) is not the "
-                             f"laboratory file's [table_calibration] {path} (SHA-256 "
-                             f"{sha[:16]}…): give one of them", file=lab_file, key=KEY)
+            raise GonioError(f"give one of them: --table-calibration {Path(given).name} "
+                             f"(SHA-256 {other[:16]}…) is not the laboratory file's "
+                             f"[table_calibration] {Path(path).name} (SHA-256 {sha[:16]}…)",
+                             file=lab_file, key=KEY)
     return str(path)

@@ -144,8 +144,10 @@ def named_contradictions(metadata: dict, named: dict, lab: dict | None,
     """Each contradiction of the identity texts (serial, model, manufacturer, gyro type: not
     the conditions, which a chamber programme changes on purpose) of the files the readings
     name as part of their data (``named``: {file name: its metadata}) with the readings'
-    own ``metadata``, with ``lab`` and with ``record``: a thermal programme or a static
-    record of another instrument is not this calibration's, whatever file it came in.
+    own ``metadata``, with ``lab`` and with ``record`` (a text the readings state too with
+    the readings' only: their own contradiction with the laboratory file is stated once):
+    a thermal programme or a static record of another instrument is not this calibration's,
+    whatever file it came in.
 
     >>> [(c["by"], c["lab"]) for c in named_contradictions(
     ...     {"serial": "T-1"}, {"thermal.csv": {"serial": "T-9"}}, None, None, "readings.csv")]
@@ -164,7 +166,11 @@ def named_contradictions(metadata: dict, named: dict, lab: dict | None,
                                    ({"instrument": record or {}}, RECORD,
                                     "the records' {k}")):
             for c in contradictions(md, other):
-                if c["tolerance"] is None:
+                # a text the readings state too is compared with theirs only: the readings'
+                # own contradiction with the laboratory file or the record is stated once
+                said = c["what"] in {w for w, _, key, _ in TEXT_FIELDS if own["instrument"]
+                                     .get(key)}
+                if c["tolerance"] is None and (other is own or not said):
                     out.append({**c, "key": f"# {c['key']}", "by": f"{name} says",
                                 "of": of, "lab_key": lab_key.format(
                                     k=c["lab_key"].split(".")[-1])})
