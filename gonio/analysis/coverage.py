@@ -160,20 +160,34 @@ def coverage(abs_err: np.ndarray, U: np.ndarray) -> dict:
     per-trial fractions: accounts for the correlation within a trial), the number
     of comparisons, and the fraction per point (last axis).
 
+    A NaN error is a reading the calibration set aside (its screening): it is no comparison
+    (neither a hit nor a miss); the fractions are over the readings used, and
+    ``set_aside`` counts the others (the key only where there are any).
+
     >>> c = coverage(np.array([[0.1, 0.5], [0.2, 0.1]]), np.array([0.3, 0.3]))
     >>> c["fraction"], c["n"], c["per_point"]
     (0.75, 4, [1.0, 0.5])
+    >>> c = coverage(np.array([[0.1, np.nan], [0.2, 0.5]]), np.array([0.3, 0.3]))
+    >>> round(c["fraction"], 4), c["n"], c["per_point"], c["set_aside"]
+    (0.6667, 3, [1.0, 0.0], 1)
     """
     a = np.asarray(abs_err, dtype=float)
     u = np.asarray(U, dtype=float).reshape((-1,) + (1,) * (a.ndim - 1))
-    hit = a <= u
-    p = float(hit.mean())
-    per_trial = hit.reshape(hit.shape[0], -1).mean(axis=1)
+    used = np.isfinite(a)
+    hit = (a <= u) & used
+    n = int(used.sum())
+    p = float(hit.sum() / n) if n else math.nan
+    h_t, n_t = (x.reshape(x.shape[0], -1).sum(axis=1) for x in (hit, used))
+    per_trial = h_t[n_t > 0] / n_t[n_t > 0]
     t = per_trial.size
     u_tr = float(per_trial.std(ddof=1) / math.sqrt(t)) if t > 1 else math.nan
-    per_point = hit.reshape(-1, hit.shape[-1]).mean(axis=0)
-    return {"fraction": p, "u_binomial": binomial_u(p, hit.size), "u_trials": u_tr,
-            "n": int(hit.size), "per_point": [float(x) for x in per_point]}
+    h_p, n_p = (x.reshape(-1, x.shape[-1]).sum(axis=0) for x in (hit, used))
+    per_point = np.where(n_p > 0, h_p / np.maximum(n_p, 1), math.nan)
+    out = {"fraction": p, "u_binomial": binomial_u(p, n), "u_trials": u_tr,
+           "n": n, "per_point": [float(x) for x in per_point]}
+    if n < a.size:
+        out["set_aside"] = int(a.size - n)
+    return out
 
 
 def spawn_seed(seed: int, key: int, index: int) -> int:

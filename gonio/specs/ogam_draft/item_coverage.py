@@ -376,21 +376,7 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                     else None,
                     u_points=[r.get("u_c_points") for r in rs])
         elif name == "repeatability":
-            s2 = np.array([r["s_points"] for r in rs]) ** 2
-            truth = float(np.sqrt(s2.mean(axis=0)).max())
-            item["ensemble_truth"] = truth
-            item["within_U"] = within(np.abs(vals - truth) <= U)
-            item["two_sided"] = two_sided(vals - truth, U, u_c, own)
-            iv = np.array([r["interval"] for r in rs])
-            hold = (iv[:, 0] <= truth) & (truth <= iv[:, 1])
-            item["interval_holds_truth"] = dict(
-                within(hold), clopper_pearson=list(clopper_pearson(int(hold.sum()),
-                                                                   int(hold.size))),
-                mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
-            _chi_square_spread(item, rs, vals, truth)
-            if rs and all(r.get("nu") for r in rs):
-                item["predicted"] = repeatability_prediction(np.sqrt(s2.mean(axis=0)),
-                                                             min(r["nu"] for r in rs))
+            _repeatability_item(item, rs, vals, U, u_c, own)
         else:
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = within(np.abs(vals - t) <= U)
@@ -501,6 +487,40 @@ def repeatability_prediction(sigma, nu: float, n: int = 400) -> dict:
             "interval_coverage": float(1.0 - max_stdev_cdf(theta / factor, sig, nu)),
             "nu": float(nu), "points": int(sig.size),
             "source": "R's exact distribution at the study's ensemble sigma_i"}
+
+
+def _repeatability_item(item: dict, rs: list, vals, U, u_c, own: bool) -> None:
+    """R in :func:`item_coverage`: judged against the ensemble truth max_i σ_i (σ_i the
+    RMS of the trials' s_i), its interval's coverage, and R's predicted distribution."""
+    # a position read in one series of a trial (the other set aside by the
+    # screening) has no s_i there (NaN, 7.5): σ_i is the RMS over the trials that
+    # have it; a position no trial has is left out (``positions_without_s``)
+    s2 = np.array([r["s_points"] for r in rs], dtype=float) ** 2
+    has = np.isfinite(s2)
+    n_has = has.sum(axis=0)
+    sigma_i = np.sqrt(np.where(has, s2, 0.0).sum(axis=0)[n_has > 0] / n_has[n_has > 0])
+    if (~has).any():
+        item["positions_without_s"] = {
+            "trial_points": int((~has).sum()), "positions": int((n_has == 0).sum())}
+    truth = float(sigma_i.max())
+    item["ensemble_truth"] = truth
+    item["within_U"] = within(np.abs(vals - truth) <= U)
+    item["two_sided"] = two_sided(vals - truth, U, u_c, own)
+    iv = np.array([r["interval"] for r in rs])
+    hold = (iv[:, 0] <= truth) & (truth <= iv[:, 1])
+    item["interval_holds_truth"] = dict(
+        within(hold), clopper_pearson=list(clopper_pearson(int(hold.sum()),
+                                                           int(hold.size))),
+        mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
+    _chi_square_spread(item, rs, vals, truth)
+    if rs and all(r.get("nu") for r in rs):
+        # R's distribution over the positions with a σ_i, each with the trials' ν:
+        # where a trial lacks a position its R is the max over fewer s_i (at most
+        # as large), so with ``positions_without_s`` the prediction is approximate
+        item["predicted"] = repeatability_prediction(sigma_i, min(r["nu"] for r in rs))
+        if (~has).any():
+            item["predicted"]["approximate"] = ("a trial lacks s_i at some positions "
+                                                "(readings set aside)")
 
 
 def _chi_square_spread(item: dict, rs: list, vals, truth) -> None:

@@ -776,20 +776,33 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
               "intrinsic": np.broadcast_to(case.truth_intrinsic, E.shape)}
     U = np.array([t.U_arcsec for t in tr])
     Ux = np.array([t.U_extended_arcsec for t in tr])
-    Ei = E.mean(axis=1)
+    # a reading the calibration's screening set aside is NaN in E: E_i is the mean of the
+    # series it used (the calibration's own E_i), its truth the mean over the same series;
+    # the errors' means and the coverages are over the readings used (coverage's set_aside)
+    used = np.isfinite(E)
+    n_used = used.sum(axis=1)
+    Ei = np.where(n_used > 0, np.where(used, E, 0.0).sum(axis=1) / np.maximum(n_used, 1),
+                  np.nan)
+
+    def mean_over_used(x, axis=None):
+        ok = np.isfinite(x)
+        return np.where(ok, x, 0.0).sum(axis=axis) / ok.sum(axis=axis)
 
     def block(Uv):
         out = {}
         for name, T in truths.items():
-            Ti = T.mean(axis=1)
+            Ti = np.where(used, T, 0.0).sum(axis=1) / np.maximum(n_used, 1)
             d_i, d_ij = Ei - Ti, E - T
+            ok_i = np.isfinite(d_i)
             out[name] = {
                 "coverage_E_i": coverage(np.abs(d_i), Uv),
                 "coverage_E_ij": coverage(np.abs(d_ij), Uv),
-                "mean_abs_error_E_i_arcsec": float(np.abs(d_i).mean()),
-                "mean_abs_error_E_ij_arcsec": float(np.abs(d_ij).mean()),
-                "bias_E_i_per_point_arcsec": [float(x) for x in d_i.mean(axis=0)],
-                "std_E_i_per_point_arcsec": [float(x) for x in d_i.std(axis=0, ddof=1)]
+                "mean_abs_error_E_i_arcsec": float(mean_over_used(np.abs(d_i))),
+                "mean_abs_error_E_ij_arcsec": float(mean_over_used(np.abs(d_ij))),
+                "bias_E_i_per_point_arcsec": [float(x) for x in mean_over_used(d_i, 0)],
+                "std_E_i_per_point_arcsec": [
+                    float(np.std(d_i[ok_i[:, j], j], ddof=1)) if ok_i[:, j].sum() > 1
+                    else math.nan for j in range(d_i.shape[1])]
                 if len(tr) > 1 else None,
             }
         return out
