@@ -289,3 +289,81 @@ def test_virtual_readings_marked_on_every_chinese_page(run):
         assert mark in re.sub(r"\s+", "", text), \
             f"{spec}: zh printed HTML page {i} of {len(printed)} lacks the mark"
     assert labels("zh")["virtual"] in (zh / "certificate.html").read_text(encoding="utf-8")
+
+
+def _first_page_text(pdf: Path) -> str:
+    return " ".join(pdf_pages(pdf)[0].split())
+
+
+def test_first_page_flags_the_contradicted_identity(run):
+    """Proceeding with a laboratory file whose serial the readings contradict: page 1 (PDF and
+    the HTML, English and Chinese) prints the laboratory file's serial with the flag pointing
+    to the finding, and only that line; summary.txt flags the serial it states; the DCC's
+    identification carries the remark and refers to the finding's statement, which names the
+    readings' serial."""
+    from lxml import etree
+
+    from gonio.report.dcc import DCC_NS
+
+    spec, seed, cal = run
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    serial = res["metadata"]["serial"]
+    en, zh = labels("en"), labels("zh")
+    page1 = _first_page_text(cal / "certificate.pdf")
+    assert f"{en['serial']} {LAB_SERIAL} {en['identity_flag']}" in page1, page1
+    assert page1.count(en["identity_flag"]) == 1            # model, manufacturer: not flagged
+    page = (cal / "certificate.html").read_text(encoding="utf-8")
+    assert re.search(rf"<td>{en['serial']}</td><td><span class=\"nb\">{LAB_SERIAL}</span>"
+                     rf"<span class=\"flag\"> {re.escape(en['identity_flag'])}</span></td>",
+                     page), spec
+    assert page.count('class="flag"') == 1
+    summary = (cal / "summary.txt").read_text(encoding="utf-8").splitlines()
+    assert sum(x.startswith(f"serial: {LAB_SERIAL} [CONTRADICTED") for x in summary) == 1
+    root = etree.parse(str(cal / "certificate.dcc.xml")).getroot()
+    ident = next(root.iter(f"{{{DCC_NS}}}identification"))
+    assert ident.findtext(f"{{{DCC_NS}}}value") == LAB_SERIAL
+    name = " ".join(c.text for c in ident.iter(f"{{{DCC_NS}}}content"))
+    ref = ident.get("refId")
+    assert ref and f"statement {ref}" in name and "contradicted" in name, name
+    st = next(s for s in root.iter(f"{{{DCC_NS}}}statement") if s.get("id") == ref)
+    said = " ".join(c.text for c in st.iter(f"{{{DCC_NS}}}content"))
+    assert f"say '{serial}'" in said and LAB_SERIAL in said, said
+    work = cal.parent                  # the Chinese certificate of the same readings
+    zh_out = work / "cal-zh-flag"
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
+          lab_file(work, 'on_mismatch = "proceed"', name="lab-zh-flag.toml"), "--lang", "zh",
+          "--out", zh_out, cwd=work)
+    page1 = re.sub(r"\s+", "", pdf_pages(zh_out / "certificate.pdf")[0])
+    assert zh["serial"] + LAB_SERIAL + zh["identity_flag"] in page1, page1
+    page = (zh_out / "certificate.html").read_text(encoding="utf-8")
+    assert f'{LAB_SERIAL}</span><span class="flag">{zh["identity_flag"]}</span>' in page
+
+
+def test_the_flag_follows_what_is_contradicted(tmp_path):
+    """A laboratory file with the readings' own serial and a temperature 5 °C off, proceeding:
+    the temperature line is flagged, the serial is not (the flag follows the finding)."""
+    from gonio.formats.provenance import readings_metadata
+
+    gonio("simulate", "--spec", "jjf1535-2015", "--protocol", PINS / "jjf1535-2015-small.toml",
+          "--seed", 3, "--out", tmp_path / "sim", cwd=tmp_path)
+    md = readings_metadata(tmp_path / "sim" / "readings.csv")
+    t = float(md.get("temperature_c") or md["room_temperature_c"])
+    lab = lab_file(tmp_path, 'on_mismatch = "proceed"', name="warm.toml", temperature_c=t + 5)
+    lab.write_text(lab.read_text(encoding="utf-8").replace(LAB_SERIAL, md["serial"]),
+                   encoding="utf-8")
+    out = tmp_path / "warm"
+    gonio("calibrate", tmp_path / "sim" / "readings.csv", "--spec", "jjf1535-2015",
+          "--protocol", PINS / "jjf1535-2015-small.toml", "--lab", lab, "--dcc", "--out", out,
+          cwd=tmp_path)
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    assert [f["subject"] for f in res["findings"] if f["code"] == "identity-mismatch"] == \
+        ["temperature"]
+    en = labels("en")
+    text = " ".join(pdf_pages(out / "certificate.pdf")[0:2])
+    text = " ".join(text.split())
+    assert f"{t + 5:g} °C {en['identity_flag']}" in text, text       # the temperature's line
+    assert text.count(en["identity_flag"]) == 1
+    summary = (out / "summary.txt").read_text(encoding="utf-8")
+    assert f"temperature: {t + 5:g} °C [CONTRADICTED" in summary
+    assert "serial: " + md["serial"] + " [" not in summary

@@ -11,8 +11,10 @@ humidity further apart than the tolerance (``[identity]`` ``temperature_toleranc
 :data:`HUMIDITY_TOLERANCE_PCT`) is a contradiction. Where either side is silent nothing is
 compared. A contradiction refuses the calibration with one line (``GonioError``, exit 2)
 unless the laboratory file says ``[identity] on_mismatch = "proceed"``: then each one is a
-flagged finding (code ``identity-mismatch``) stated on the certificate, in summary.txt and in
-results.json.
+flagged finding (code ``identity-mismatch``, its ``subject`` what it contradicts) stated on
+the certificate, in summary.txt and in results.json; the certificate's first page, summary.txt
+and the DCC's identification flag the contradicted line beside it
+(:func:`gonio.result.findings.identity_subjects`).
 """
 
 from __future__ import annotations
@@ -212,5 +214,6 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
     return [Finding(MISMATCH_CODE, _message(c) + "; the laboratory file chose to proceed "
                     "([identity] on_mismatch = \"proceed\"): the certificate's identity and "
                     "conditions are the laboratory file's", "flagged", file=name,
-                    rule="identity and conditions of the readings = the laboratory file's")
+                    rule="identity and conditions of the readings = the laboratory file's",
+                    subject=c["what"])
             for c in found]

@@ -375,7 +375,10 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     ident = element(ids, "dcc:identification")
     element(ident, "dcc:issuer", "manufacturer")
     element(ident, "dcc:value", str(inst.get("serial") or md.get("serial") or "not stated"))
-    text_element(ident, "dcc:name", "serial number")
+    remark, refs = identity_remark(findings)
+    text_element(ident, "dcc:name", "serial number" + remark)
+    if refs:
+        ident.set("refId", refs)
 
     la = lab_.get("laboratory") or {"name": "gonio virtual bench", "address": None,
                                      "contact": ""}
@@ -431,17 +434,36 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     return sts
 
 
+def identity_remark(findings) -> tuple[str, str]:
+    """The remark the item's dcc:identification carries where the readings contradict the
+    identity or conditions the certificate states (the laboratory chose to proceed), and the
+    ids of the statements that state it (its ``refId``): ("", "") where none does.
+
+    >>> identity_remark([{"code": "identity-mismatch", "action": "flagged",
+    ...                   "subject": "serial", "message": "serial: the readings say 'A'"}])
+    ('; remark: contradicted by the readings (serial: statement finding-1); the laboratory chose to proceed', 'finding-1')
+    """
+    from gonio.result.findings import identity_subjects
+
+    subjects = identity_subjects(findings)
+    if not subjects:
+        return "", ""
+    said = ", ".join(f"{s}: " + ", ".join(f"statement finding-{i}" for i in ns)
+                     for s, ns in subjects.items())
+    refs = " ".join(f"finding-{i}" for ns in subjects.values() for i in ns)
+    return (f"; remark: contradicted by the readings ({said}); the laboratory chose to "
+            "proceed", refs)
+
+
 def finding_statements(sts, findings, L: dict) -> None:
     """One dcc:statement (dcc:name, dcc:declaration: :func:`gonio.report.i18n.finding_text`,
     the certificate's line) per screening finding the certificate states: a serial the
     readings contradict where the laboratory chose to proceed, readings set aside, planned
     points missing, conditions dropped, a sparse temperature log interpolated. A DCC that
     certifies without them would say less than the certificate."""
-    from gonio.result.findings import WHOLE_FILE_CODES
+    from gonio.result.findings import stated_findings
 
-    found = sorted((f for f in findings or () if f.get("action") != "refused"),
-                   key=lambda f: f.get("code") not in WHOLE_FILE_CODES)
-    for i, f in enumerate(found, 1):
+    for i, f in enumerate(stated_findings(findings), 1):   # identity_remark's numbers
         st = element(sts, "dcc:statement", id=f"finding-{i}")
         text_element(st, "dcc:name", L.get("screening_h", "Screening of the readings"))
         text_element(st, "dcc:declaration", finding_text(f, L))

@@ -30,8 +30,10 @@ from __future__ import annotations
 
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.render import Block
+from gonio.report.stated import FlagText
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import conformity_blocks
+from gonio.result.findings import identity_subjects
 
 __all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformity_section",
            "signature_blocks", "meta_text", "record_of", "is_draft", "record_notices",
@@ -82,10 +84,37 @@ def _laboratory_rows(lab: dict | None, L: dict) -> list:
     return rows
 
 
+#: The first page's line an identity finding's subject flags
+#: (:func:`gonio.result.findings.identity_subjects`): the gyro type is part of the description.
+FLAGGED_ROW = {"serial": "serial", "model": "model", "manufacturer": "manufacturer",
+               "gyro type": "description", "temperature": "temperature",
+               "humidity": "humidity"}
+
+
+def flagged(rows: list, res: dict, L: dict) -> list:
+    """``rows`` ((label, value)) with ``L["identity_flag"]`` beside each value an identity
+    finding of ``res`` contradicts (the laboratory chose to proceed; the finding itself is
+    stated under "Screening of the readings"): the signatory reads the first page.
+
+    >>> from gonio.report.i18n import labels
+    >>> L = labels("en")
+    >>> res = {"findings": [{"code": "identity-mismatch", "action": "flagged",
+    ...                      "subject": "serial", "message": "serial: the readings say 'A'"}]}
+    >>> ["".join(map(str, v)) if isinstance(v, list) else v
+    ...  for _, v in flagged([(L["serial"], "SN-1"), (L["model"], "M")], res, L)]
+    ['SN-1 [contradicted: see “Screening of the readings”]', 'M']
+    """
+    keys = {L[FLAGGED_ROW[s]] for s in identity_subjects(res.get("findings"))
+            if s in FLAGGED_ROW}
+    sep = "" if L.get("_lang") == "zh" else " "
+    return [(k, [v, FlagText(sep + L["identity_flag"])] if k in keys else v) for k, v in rows]
+
+
 def _item_rows(res: dict, lab: dict | None, L: dict, specification: str,
                translate=None) -> list:
     """Customer and address, instrument, dates, place, specification and readings file
-    (``translate``: :func:`meta_text`'s)."""
+    (``translate``: :func:`meta_text`'s); a line the readings contradict flagged
+    (:func:`flagged`)."""
     md = res.get("metadata", {})
     lab_ = lab or {}
     ns = L["not_stated"]
@@ -114,7 +143,7 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str,
             x=f"SHA-256 {src['sha256'][:16]}…" + L["comma"] + L["rows_word"].format(
                 n=src["rows"]))),
     ]
-    return rows
+    return flagged(rows, res, L)
 
 
 def condition_text(v) -> str:
@@ -145,7 +174,7 @@ def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
         f"{condition_text(t_md)} °C{tagged}" if t_md else ns)
     h_txt = f"{condition_text(h)} %{said}" if h is not None else (
         f"{condition_text(md['humidity_pct'])} %{tagged}" if md.get("humidity_pct") else ns)
-    return [(L["temperature"], t_txt), (L["humidity"], h_txt)]
+    return [(L["temperature"], t_txt), (L["humidity"], h_txt)]   # flagged by the caller
 
 
 def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
@@ -181,7 +210,7 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
     add("h", L["environment"])
-    add("kv", _environment_rows(md, lab, L) + list(environment))
+    add("kv", flagged(_environment_rows(md, lab, L), res, L) + list(environment))
     return out
 
 

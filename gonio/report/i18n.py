@@ -81,6 +81,9 @@ LABELS: dict[str, dict[str, str]] = {
     "not_measured": {"en": "not measured", "zh": "未测"},
     "uncertainty": {"en": "Measurement uncertainty", "zh": "测量不确定度"},
     "screening_h": {"en": "Screening of the readings", "zh": "读数筛查"},
+    # beside a line of the first page an identity finding contradicts (gonio.report.header)
+    "identity_flag": {"en": "[contradicted: see “Screening of the readings”]",
+                      "zh": "［存在矛盾：见“读数筛查”］"},
     "more_findings": {"en": "… {n} more in results.json (findings)",
                       "zh": "……另有 {n} 条，见 results.json"},
     "screening_note": {"en": "Screening of the readings: {n} reading(s) set aside (not used; "

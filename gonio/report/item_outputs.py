@@ -27,8 +27,9 @@ def results_json(result, lab: dict | None = None) -> dict:
 
 
 def summary(result, lab: dict | None = None) -> str:
-    """The summary printed and written to ``summary.txt``."""
-    return result.summary()
+    """The summary printed and written to ``summary.txt`` (``lab``: the laboratory file the
+    certificate is issued with)."""
+    return result.summary(lab)
 
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
@@ -37,6 +38,6 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     the certificate (``dcc``: its DCC XML) of the stored ``result`` into ``out``: its
     conformity decisions rendered as the pipeline made them."""
     out = Path(out)
-    paths = write_results(result, out)
+    paths = write_results(result, out, lab)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc))
     return paths

@@ -26,7 +26,7 @@ from gonio.report.i18n import display, finding_text, labels, reason_text, source
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf_figures
 from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums
-from gonio.result.findings import WHOLE_FILE_CODES
+from gonio.result.findings import stated_findings
 from gonio.result.statement import p_relation, unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import figures_of
@@ -238,8 +238,7 @@ def screening_blocks(res: dict, L: dict, phrases=(), extra: dict | None = None,
     (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table), those
     about the whole file (the identity, unread columns) first;
     nothing when the screening found nothing."""
-    found = sorted((f for f in res.get("findings") or () if f["action"] != "refused"),
-                   key=lambda f: f.get("code") not in WHOLE_FILE_CODES)   # whole-file first
+    found = stated_findings(res.get("findings"))            # whole-file first
     if not found:
         return []
     aside = sum(f["action"] == "set_aside" for f in found)

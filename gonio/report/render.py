@@ -32,6 +32,7 @@ from gonio.errors import GonioError
 from gonio.report.figures import (SVG_PAD_IN, first_family, font_fallback, minus_signs,
                                   mpl_style, plain_log_ticks)
 from gonio.report.i18n import cjk_font, labels, minus_sign
+from gonio.report.stated import FlagText
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import Num
 from gonio.report.text import fit_header
@@ -65,6 +66,7 @@ thead{display:table-header-group}
 td,th{border:1px solid #888;padding:3px 6px;text-align:left;vertical-align:top}
 th{background:#eee}
 .nb{white-space:nowrap}
+.flag{color:#b00020;font-weight:bold}
 table.kv td:first-child{width:32%%;background:#f6f6f6}
 .banner{background:#b00020;color:#fff;font-weight:bold;text-align:center;padding:8px;font-size:18px;letter-spacing:1px;margin:6px 0}
 .watermark{position:fixed;top:45%%;left:0;width:100%%;text-align:center;transform:rotate(-30deg);font-size:64px;font-weight:bold;color:rgba(176,0,32,0.10);pointer-events:none;z-index:10}
@@ -116,6 +118,8 @@ def _h(x, cell: bool = False) -> str:
                 f'data-rule="{html.escape(x.rule)}">{html.escape(minus_sign(x.text))}</span>')
     if isinstance(x, NoBreak):
         return f'<span class="nb">{html.escape(minus_sign(str(x)))}</span>'
+    if isinstance(x, FlagText):
+        return f'<span class="flag">{html.escape(str(x))}</span>'
     if isinstance(x, list):
         return "".join(_h(s, cell) for s in x)
     s = html.escape(minus_sign(str(x)))
@@ -588,11 +592,14 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
         for k, v in b.data:
             vl = _cell_lines(v, lay.cols(0.66))
 
-            def op(fig, y, k=_text(k), vl=vl):
+            flag = isinstance(v, list) and any(isinstance(x, FlagText) for x in v)
+
+            def op(fig, y, k=_text(k), vl=vl, flag=flag):   # a flagged value all in red
                 fig.text(_LEFT, y - ln * 0.8, k, fontsize=fs, va="baseline", color="0.25")
                 for i, t in enumerate(vl):
                     fig.text(_LEFT + 0.32 * (_RIGHT - _LEFT), y - ln * (0.8 + i), t,
-                             fontsize=fs, va="baseline")
+                             fontsize=fs, va="baseline", color="#b00020" if flag else "black",
+                             weight="bold" if flag else "normal")
             out.append((ln * len(vl), op, "line"))
         out.append((4 * _PT, None, "gap"))
     elif b.kind == "table":

@@ -35,6 +35,11 @@ class NoBreakText(str):
     ``nowrap``, one token in the PDF's wrapping (:mod:`gonio.report.render`)."""
 
 
+class FlagText(str):
+    """A warning beside a value (a line of the first page the readings contradict): red in
+    the HTML (``class="flag"``) and the PDF (:mod:`gonio.report.render`)."""
+
+
 @dataclass(frozen=True)
 class Num:
     """A number shown: its text, its path in results.json, its display rule."""

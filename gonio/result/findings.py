@@ -45,6 +45,10 @@ class Finding:
     test: str | None = None
     clause: str | None = None
     rule: str | None = None
+    #: what of the instrument's identity or conditions the finding contradicts ("serial",
+    #: "model", "manufacturer", "gyro type", "temperature", "humidity"; an identity finding
+    #: only): the certificate flags that line of its first page (:func:`identity_subjects`)
+    subject: str | None = None
 
     def __post_init__(self):
         if self.action not in ACTIONS:
@@ -61,7 +65,55 @@ class Finding:
         return where
 
     def to_json(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if d["subject"] is None:        # results.json of every other finding as before
+            del d["subject"]
+        return d
+
+
+#: The identity and conditions an identity finding can contradict, as its message begins
+#: ("serial: the readings say …"; :mod:`gonio.pipeline.identity`).
+IDENTITY_SUBJECTS: tuple[str, ...] = ("serial", "model", "manufacturer", "gyro type",
+                                      "temperature", "humidity")
+
+
+def identity_subjects(findings) -> dict[str, list[int]]:
+    """What of the instrument's identity and conditions a stated identity finding contradicts
+    (the laboratory chose to proceed): {subject: the finding's numbers}, numbered 1, 2, … as
+    the certificate and the DCC state the findings (all but the refused ones, those about the
+    whole file first: ``dcc:statement id="finding-N"``). ``findings``: Finding objects or
+    results.json dicts; a stored finding without ``subject`` (a result stored before it was
+    recorded) is read from its message's first word, which :mod:`gonio.pipeline.identity`
+    writes as the subject. The certificate flags those lines of its first page, summary.txt
+    and the DCC's identification point to the finding.
+
+    >>> found = [{"code": "spike", "action": "set_aside", "message": "x", "line": 5},
+    ...          {"code": IDENTITY_CODE, "action": "flagged", "subject": "serial",
+    ...           "message": "serial: the readings say 'A'"},
+    ...          {"code": IDENTITY_CODE, "action": "flagged",
+    ...           "message": "temperature: the readings say 25 (# temperature_c)"}]
+    >>> identity_subjects(found)
+    {'serial': [1], 'temperature': [2]}
+    """
+    out: dict[str, list[int]] = {}
+    for i, f in enumerate(stated_findings(findings), 1):
+        g = f if isinstance(f, dict) else f.to_json()
+        if g.get("code") != IDENTITY_CODE:
+            continue
+        subject = g.get("subject") or next(
+            (s for s in IDENTITY_SUBJECTS if (g.get("message") or "").startswith(s + ":")), None)
+        if subject:
+            out.setdefault(subject, []).append(i)
+    return out
+
+
+def stated_findings(findings) -> list:
+    """The findings a certificate states, in its order: all but the refused ones, those about
+    the whole file (:data:`WHOLE_FILE_CODES`) first, the rest in their order."""
+    def get(f, k):
+        return f.get(k) if isinstance(f, dict) else getattr(f, k, None)
+    return sorted((f for f in findings or () if get(f, "action") != "refused"),
+                  key=lambda f: get(f, "code") not in WHOLE_FILE_CODES)
 
 
 def findings_to_json(findings) -> list[dict]:

@@ -455,9 +455,11 @@ class Result:
             raise GonioError(f"malformed results.json: {type(exc).__name__} {str(exc)[:80]}",
                              key="results") from None
 
-    def summary(self) -> str:
+    def summary(self, lab: dict | None = None) -> str:
         """One line per item: clause, title, value ± U (k, ν_eff) unit, or why not measured;
-        then the conformity decisions and the screening findings (``summary.txt``)."""
+        then the conformity decisions and the screening findings (``summary.txt``); an
+        identity the readings contradict flagged under the title (``lab``: the laboratory
+        file the certificate is issued with)."""
         from gonio.result.text import summary_lines
 
-        return "\n".join(summary_lines(self)) + "\n"
+        return "\n".join(summary_lines(self, lab)) + "\n"

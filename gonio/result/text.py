@@ -7,6 +7,7 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 from __future__ import annotations
 
 from gonio.formats.provenance import result_provenance
+from gonio.result.findings import identity_subjects
 from gonio.result.statement import decimals_for_sig, given_text, item_statement, round_half_up
 
 #: summary.txt's first line for readings from the virtual bench (their own metadata say so).
@@ -77,10 +78,47 @@ def conformity_text(c) -> str:
     return f"{c.item}: limits {lims} ({c.rule}{gb}): {c.outcome}{pc}"
 
 
-def summary_lines(result) -> list[str]:
-    """The lines of :meth:`~gonio.result.model.Result.summary`."""
+#: Where the certificate takes each identity subject's text from: (laboratory file section and
+#: key, the readings' metadata keys, unit) (:func:`identity_lines`).
+IDENTITY_SOURCES = {"serial": ("instrument", "serial", ("serial",), ""),
+                    "model": ("instrument", "model", ("model",), ""),
+                    "manufacturer": ("instrument", "manufacturer", ("manufacturer",), ""),
+                    "gyro type": ("instrument", "gyro_type", ("gyro_type",), ""),
+                    "temperature": ("environment", "temperature_c",
+                                    ("temperature_c", "room_temperature_c"), " °C"),
+                    "humidity": ("environment", "humidity_pct", ("humidity_pct",), " %")}
+
+
+def identity_lines(findings, metadata: dict, lab: dict | None) -> list[str]:
+    """summary.txt's lines for each identity or condition the readings contradict where the
+    laboratory chose to proceed: the text the certificate states (the laboratory file's,
+    else the readings'), flagged and pointing to the finding below; ``[]`` where none is.
+
+    >>> identity_lines([{"code": "identity-mismatch", "action": "flagged", "subject": "serial",
+    ...                  "message": "serial: the readings say 'A'"}], {"serial": "A"},
+    ...                {"instrument": {"serial": "SN-1"}})
+    ["serial: SN-1 [CONTRADICTED by the readings: see the flagged finding 'serial: ...' below]"]
+    """
+    out = []
+    for subject in identity_subjects(findings):
+        section, key, md_keys, unit = IDENTITY_SOURCES.get(subject, ("", "", (), ""))
+        v = ((lab or {}).get(section) or {}).get(key)
+        if v in (None, ""):
+            v = next((metadata.get(k) for k in md_keys if metadata.get(k) not in (None, "")),
+                     None)
+        text = "not stated" if v in (None, "") else (
+            f"{v:g}" if isinstance(v, float) else str(v).strip()) + unit
+        out.append(f"{subject}: {text} [CONTRADICTED by the readings: see the flagged finding "
+                   f"'{subject}: ...' below]")
+    return out
+
+
+def summary_lines(result, lab: dict | None = None) -> list[str]:
+    """The lines of :meth:`~gonio.result.model.Result.summary` (``lab``: the laboratory file
+    the certificate is issued with, whose identity texts a contradiction flags)."""
     lines = virtual_line({"provenance": result.provenance, "metadata": result.metadata})
     lines.append(result.spec_title or result.spec_key)
+    lines += identity_lines(result.findings, result.metadata, lab)
     for it in result.items.values():
         head = f"  {it.clause:10s} {it.title}"
         if not it.measured or it.value is None:

@@ -43,6 +43,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
+from gonio.result.findings import stated_findings
 from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
                                            conformity_for, detail, e_budget, e_by_interval,
@@ -82,7 +83,7 @@ def _summarised(kind: str, data):
 def screening_notes(res: dict, L: dict, add) -> None:
     """A notice when the screening set data aside or found the programme incomplete
     (results.json ``findings``): the count, then one line per finding."""
-    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
+    found = stated_findings(res.get("findings"))     # the identity's first, as the DCC's
     if not found:
         return
     flagged = sum(f["action"] == "flagged" for f in found)

@@ -23,7 +23,7 @@ from gonio.result.findings import UNREAD_CODE
 from gonio.result.model import Result
 from gonio.result.statement import signed_text
 from gonio.result.tables import results_json_text, write_tables
-from gonio.result.text import virtual_line
+from gonio.result.text import identity_lines, virtual_line
 from gonio.specs.ogam_draft.calibration import calibrate
 
 
@@ -59,7 +59,8 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     statement in the table); from the result or its results.json."""
     result = result if isinstance(result, Result) else Result.from_json(result)
     d = result.to_json()
-    lines = virtual_line(d) + [summary_text(d, "en", lab).rstrip("\n")]
+    lines = virtual_line(d) + identity_lines(d.get("findings"), d.get("metadata") or {}, lab) \
+        + [summary_text(d, "en", lab).rstrip("\n")]
     kl = (d["items"].get("scale_factor_nonlinearity") or {}).get("details") or {}
     if kl.get("estimates"):
         lines.append("scale_factor_nonlinearity (the draft's range as measured, not stated): "

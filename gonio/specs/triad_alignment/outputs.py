@@ -30,7 +30,7 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     result = dataclasses.replace(result, tables=prediction_tables(
         result.extra.get("thermal_model")))
     out = Path(out)
-    paths = write_results(result, out)
+    paths = write_results(result, out, lab)
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,
                                          dcc=dcc))
     return paths
