@@ -79,6 +79,9 @@ class Chamber:
     point_deviation_c: float = 0.0       # > 0: per-set-point deviation, uniform in ±this
     deviation_seed: int = 0
     position_offset_c: float | None = None   # the gyro's place in the volume; None: +half
+    #: Set (the coverage studies' worst-condition case): the deviation is + ``point_deviation_c``
+    #: at every set point above this temperature and − ``point_deviation_c`` at or below it
+    deviation_split_c: float | None = None
 
     def position_offset(self) -> float:
         """The gyro's temperature offset from the chamber's (°C): ``position_offset_c``,
@@ -98,9 +101,15 @@ class Chamber:
         >>> c = Chamber(point_deviation_c=2.0, deviation_seed=7)
         >>> c.deviation_at(60.0) == c.deviation_at(60.0) != c.deviation_at(-40.0)
         True
+        >>> w = Chamber(point_deviation_c=2.0, deviation_split_c=20.0)
+        >>> w.deviation_at(70.0), w.deviation_at(20.0), w.deviation_at(-40.0)
+        (2.0, -2.0, -2.0)
         """
         if self.point_deviation_c <= 0:
             return self.deviation_c
+        if self.deviation_split_c is not None:
+            return self.point_deviation_c if float(set_point_c) > self.deviation_split_c \
+                else -self.point_deviation_c
         key = int(round((float(set_point_c) + 273.15) * 1000.0))
         rng = np.random.default_rng([int(self.deviation_seed), key])
         return float(rng.uniform(-self.point_deviation_c, self.point_deviation_c))
@@ -248,6 +257,80 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
                         deviation_seed=ch_seed, position_offset_c=pos,
                         fluctuation_phase_deg=phase),
         fixture=Fixture(mis_x, mis_y))
+
+
+#: JJF 1535-2015 Table 2's bounds of the equipment that the worst-condition case puts the
+#: bench at where the bench file states a smaller value: the rate table's rate smoothness
+#: (0.05 %, its once-per-revolution ripple), the chamber's fluctuation (±1 °C) and
+#: uniformity (2 °C).
+TABLE2_RATE_SMOOTHNESS_REL = 5.0e-4
+TABLE2_CHAMBER_FLUCTUATION_C = 1.0
+TABLE2_CHAMBER_UNIFORMITY_C = 2.0
+#: The coverage factor of the certificates whose standard uncertainty the bench states for
+#: the rate table's rate and the voltmeter's gain: the worst case puts each error at the
+#: certificate's expanded uncertainty k·u (for the table: 2 × 2.5e-4 = Table 2's 0.05 %).
+CERTIFICATE_K = 2.0
+
+
+def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
+                    cross_axis: tuple[float, float] = (0.0, 0.0)) -> Equipment:
+    """``eq`` with every error :func:`draw_equipment` draws put at the bound the procedure
+    allows, at the sign that moves the items most (the coverage studies' ``worst`` case):
+
+    - the rate table's relative rate error at + ``CERTIFICATE_K``·``rate_table_u_rel``
+      (the certificate's U, Table 2's 0.05 %) and the voltmeter's gain error at
+      + ``CERTIFICATE_K``·``acquisition_u_rel``: the same sign, so that both raise the
+      indicated scale factor (their effects on K add; either common sign is as bad);
+    - the chamber's deviation at ± ``chamber_deviation_bound_c`` at every set point:
+      + above ``temperature_split_c`` and − at or below it
+      (:attr:`Chamber.deviation_split_c`), which stretches every temperature span that
+      crosses the split by twice the bound, so a temperature coefficient (a slope over the
+      set points, or over a point and the reference point at the split) reads high in
+      magnitude; a set point visited twice keeps its deviation (hysteresis unaffected);
+    - the chamber's fluctuation amplitude and uniformity at Table 2's ±1 °C and 2 °C where
+      the bench states less (:data:`TABLE2_CHAMBER_FLUCTUATION_C`,
+      :data:`TABLE2_CHAMBER_UNIFORMITY_C`), the gyro at the volume's warm end (+ half the
+      uniformity, the same sign as the deviation above the split);
+    - the table's once-per-revolution ripple at Table 2's 0.05 % where the bench states less
+      (:data:`TABLE2_RATE_SMOOTHNESS_REL`);
+    - the gyro's misalignment in its fixture at ± ``axis_alignment_bound_deg`` about body x
+      and y, the sign that adds to the gyro's own cross-axis sensitivity on each axis
+      (``cross_axis`` = (k_x, k_y); a rotation a_y about y adds sin a_y to the apparent k_x,
+      one a_x about x adds −sin a_x to the apparent k_y; + where k is 0), so the measured
+      cross-axis sensitivity's magnitude reads high.
+
+    Not held at a worst value: the phases of the chamber's fluctuation and of the table's
+    ripple, drawn from ``seed`` exactly as :func:`draw_equipment` draws them. A phase's worst
+    value is a function of each item's point timing (it differs from item to item), and the
+    case is one trial set for every item. The amplitudes the readings state are the bench's,
+    so each budget sees the bound it is given. Same seed → same equipment.
+
+    >>> w = worst_equipment(Equipment(), 3, temperature_split_c=20.0, cross_axis=(0.01, -0.008))
+    >>> w.rate_table.rate_error_rel, w.acquisition.gain_error_rel
+    (0.0005, 6e-05)
+    >>> w.chamber.deviation_at(70.0), w.chamber.deviation_at(-40.0), w.fixture
+    (2.0, -2.0, Fixture(misalignment_x_deg=0.05, misalignment_y_deg=0.05))
+    >>> w.chamber.fluctuation_phase_deg == draw_equipment(Equipment(), 3).chamber.fluctuation_phase_deg
+    True
+    """
+    drawn = draw_equipment(eq, seed)                  # the phases, as the typeb case has them
+    a = eq.axis_alignment_bound_deg
+    kx, ky = (float(v) for v in cross_axis)
+    uni = max(eq.chamber.uniformity_c, TABLE2_CHAMBER_UNIFORMITY_C)
+    return replace(
+        eq, rate_table=replace(eq.rate_table,
+                               rate_error_rel=CERTIFICATE_K * eq.rate_table_u_rel,
+                               ripple_rel=max(eq.rate_table.ripple_rel,
+                                              TABLE2_RATE_SMOOTHNESS_REL),
+                               ripple_phase_deg=drawn.rate_table.ripple_phase_deg),
+        acquisition=replace(eq.acquisition, gain_error_rel=CERTIFICATE_K * eq.acquisition_u_rel),
+        chamber=replace(eq.chamber, point_deviation_c=eq.chamber_deviation_bound_c,
+                        deviation_split_c=float(temperature_split_c),
+                        fluctuation_c=max(eq.chamber.fluctuation_c,
+                                          TABLE2_CHAMBER_FLUCTUATION_C),
+                        uniformity_c=uni, position_offset_c=0.5 * uni,
+                        fluctuation_phase_deg=drawn.chamber.fluctuation_phase_deg),
+        fixture=Fixture(-a if ky > 0 else a, -a if kx < 0 else a))
 
 
 def equipment_from_dict(d: dict, file=None) -> Equipment:

@@ -308,15 +308,29 @@ class RateBench:
     #: The coverage studies' bench: each trial draws the equipment's type-B errors from its
     #: seed (gonio.bench.equipment.draw_equipment) before it runs.
     draw_equipment: bool = False
+    #: With ``draw_equipment``: ``"typeb"`` draws the type-B errors per trial, ``"worst"``
+    #: puts them at their bounds (gonio.bench.equipment.worst_equipment).
+    equipment_case: str = "typeb"
 
     def for_trial(self, seed: int) -> "RateBench":
         """The bench one trial of seed ``seed`` runs on: with ``draw_equipment``, the
-        equipment's errors drawn from the seed (:func:`gonio.bench.equipment.draw_equipment`);
-        else this bench."""
+        equipment's errors drawn from the seed (:func:`gonio.bench.equipment.draw_equipment`),
+        or, ``equipment_case == "worst"``, put at their bounds
+        (:func:`gonio.bench.equipment.worst_equipment`: the chamber's deviation split at the
+        gyro's reference temperature, the fixture's signs from its cross-axis
+        sensitivities); else this bench."""
         if not self.draw_equipment:
             return self
-        from gonio.bench.equipment import draw_equipment
-        return replace(self, equipment=draw_equipment(self.equipment, seed), draw_equipment=False)
+        from gonio.bench.equipment import draw_equipment, worst_equipment
+        if self.equipment_case == "worst":
+            eq = worst_equipment(self.equipment, seed,
+                                 temperature_split_c=self.gyro.reference_temperature_c,
+                                 cross_axis=(self.gyro.cross_axis_x, self.gyro.cross_axis_y))
+        elif self.equipment_case == "typeb":
+            eq = draw_equipment(self.equipment, seed)
+        else:
+            raise GonioError(f"unknown equipment case {self.equipment_case!r} (typeb, worst)")
+        return replace(self, equipment=eq, draw_equipment=False)
 
     def without_noise(self) -> "RateBench":
         """The same bench with every random and equipment error off (truth-recovery checks)."""

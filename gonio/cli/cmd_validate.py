@@ -78,7 +78,7 @@ def run(args) -> int:
         from gonio.atomic import check_output_folder_place
         check_output_folder_place(args.out)          # before any batch is written there
     if spec.coverage.engine == "items":
-        return run_items(spec, args)
+        return run_items(spec, args, given)
     return run_study(spec, args, given)
 
 
@@ -121,15 +121,16 @@ def emit(report, args) -> None:
         print(report.table(), end="")
 
 
-def run_items(spec, args) -> int:
+def run_items(spec, args, opts: dict | None = None) -> int:
     """The item coverage study (:func:`gonio.pipeline.validate.validate` →
-    :func:`gonio.pipeline.coverage.coverage_validate`)."""
+    :func:`gonio.pipeline.coverage.coverage_validate`), with the specification's options
+    given (``--cases``)."""
     from gonio.pipeline.validate import validate
 
     try:
         report = validate(args.trials, spec=spec, seed=args.seed, bench=args.bench,
                           protocol=args.protocol, workers=args.workers,
-                          scheduler=args.scheduler, batch_size=args.batch)
+                          scheduler=args.scheduler, batch_size=args.batch, **(opts or {}))
     except KeyboardInterrupt:
         sys.stderr.write("gonio: interrupted (an item study keeps no partial results)\n")
         return 130

@@ -37,11 +37,53 @@ __all__ = ["coverage_study", "coverage_validate", "coverage_table_from", "trial_
            "reduced_protocol", "study_bench", "format_coverage", "CoverageReport", "TrialJob",
            "run_batch", "ItemCoverage", "item_coverage", "wilson_interval"]
 
-def study_bench(spec: Specification, name=None):
+def study_bench(spec: Specification, name=None, case: str | None = None):
     """The bench of ``spec``'s coverage study: ``name`` (default the specification's bench)
-    through ``SPEC.coverage.study_bench``."""
+    through ``SPEC.coverage.study_bench`` (``case``: one of ``SPEC.coverage.cases``, passed
+    on as its ``case`` keyword; None: the study bench's own default)."""
     name = name or spec.default_bench
-    return spec.coverage.study_bench(name) if spec.coverage.study_bench else name
+    if not spec.coverage.study_bench:
+        return name
+    return spec.coverage.study_bench(name) if case is None else \
+        spec.coverage.study_bench(name, case=case)
+
+
+#: The case of an item study whose trials keep the seeding the study had before it had
+#: cases (spawn key = ``SPEC.coverage.stream``); every other case ``c`` of
+#: ``SPEC.coverage.cases`` (in its order, 1, 2, …) draws from the spawn key
+#: ``CASE_STREAM_STEP``·index + stream: one trial set per case, none sharing draws.
+CASE_STREAM_STEP = 16
+
+
+def study_cases(spec: Specification, cases) -> list[str]:
+    """The cases of ``spec``'s item study asked for: None → the first of
+    ``SPEC.coverage.cases`` (or the one unnamed case of a study without cases), the
+    command line's text (comma-separated, or ``all``) or a sequence of names; an unknown
+    one is a GonioError naming the known ones."""
+    known = list(spec.coverage.cases)
+    if cases is None:
+        return known[:1] or [""]
+    if not known:
+        raise GonioError(f"--cases does not apply to 'gonio validate --spec {spec.key}' (its "
+                         "item study has no cases)", key="cases")
+    if isinstance(cases, str):
+        cases = known if cases.strip() == "all" else \
+            [c.strip() for c in cases.split(",") if c.strip()]
+    cases = list(dict.fromkeys(cases))
+    if not cases:
+        raise GonioError("no cases given", key="cases")
+    for c in cases:
+        if c not in known:
+            raise GonioError(f"unknown case {c!r} of {spec.key} (known: {', '.join(known)})",
+                             key="cases")
+    return cases
+
+
+def case_stream(spec: Specification, case: str) -> int:
+    """The spawn key of ``case``'s trials (:data:`CASE_STREAM_STEP`)."""
+    known = list(spec.coverage.cases)
+    i = known.index(case) if case in known else 0
+    return spec.coverage.stream + CASE_STREAM_STEP * i
 
 
 def _toml_value(v) -> str:
@@ -131,70 +173,109 @@ class TrialJob:
     bench: object
     protocol: object
     seed: int
+    stream: int | None = None        # spawn key of the trials (None: SPEC.coverage.stream)
 
 
-def run_batch(job: "TrialJob", start: int, stop: int) -> list[tuple[int, int, str]]:
-    """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless),
+def run_batch(job: "TrialJob", start: int, stop: int) -> list[tuple[int, int, str, int]]:
+    """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless, the
+    trials' spawn key),
     with the numerical libraries' thread pools held to
     :data:`gonio.pipeline.engine.WORKER_THREADS`, as the optical study's batches are."""
     from threadpoolctl import threadpool_limits
 
     from gonio.pipeline.engine import WORKER_THREADS
 
-    key = get(job.spec_key).coverage.stream
+    key = get(job.spec_key).coverage.stream if job.stream is None else job.stream
     out = []
     with threadpool_limits(limits=WORKER_THREADS):
         for i in range(start, stop):
             sd = spawn_seed(job.seed, key, i)
             out.append((i, sd, json.dumps(trial_records(job.spec_key, job.bench, job.protocol,
-                                                        sd), sort_keys=True)))
+                                                        sd), sort_keys=True), key))
     return out
 
 
 @dataclass
 class CoverageReport:
-    """A specification's item coverage study: settings and the per-item table."""
+    """A specification's item coverage study: settings and the per-item table (one case), or
+    a table per case (``cases``: case → table; ``coverage`` then the first case's)."""
 
     settings: dict
     coverage: pd.DataFrame
+    cases: dict | None = None
+
+    CRITERION = ("|value - truth| <= U, U the item's own expanded uncertainty "
+                 "(k = t95(nu_eff)), or for an item stated by its interval alone "
+                 "(k none) the truth inside that interval; per item coverage >= "
+                 "0.90 required and sd of z >= 0.3 (U not over-wide), z = (value "
+                 "- truth)/u_c or, for a standard deviation stated by its "
+                 "chi-square interval (statistic 'chi-square'), "
+                 "Phi^-1(F_chi2(nu value^2/truth^2; nu)) with z on u_c kept as "
+                 "z_uc_mean, z_uc_sd, max_norm_error_uc; "
+                 "95 % Clopper-Pearson interval of the coverage")
+    FIXED_CRITERION = ("; a case at one fixed condition (each Type B effect at its bound) is "
+                       "judged on coverage only: a Type B line is one fixed offset there, so "
+                       "z's spread is information, not a test")
 
     def to_dict(self) -> dict:
-        """Plain dict for ``validation.json`` (deterministic)."""
+        """Plain dict for ``validation.json`` (deterministic): ``items`` for one case,
+        ``cases`` {case: items} for several."""
         from gonio import __version__
-        return {"gonio_version": __version__, "settings": self.settings,
-                "criterion": "|value - truth| <= U, U the item's own expanded uncertainty "
-                             "(k = t95(nu_eff)), or for an item stated by its interval alone "
-                             "(k none) the truth inside that interval; per item coverage >= "
-                             "0.90 required and sd of z >= 0.3 (U not over-wide), z = (value "
-                             "- truth)/u_c or, for a standard deviation stated by its "
-                             "chi-square interval (statistic 'chi-square'), "
-                             "Phi^-1(F_chi2(nu value^2/truth^2; nu)) with z on u_c kept as "
-                             "z_uc_mean, z_uc_sd, max_norm_error_uc; "
-                             "95 % Clopper-Pearson interval of the coverage",
-                "items": json.loads(self.coverage.to_json(orient="records", double_precision=15))}
+
+        def rows(df):
+            return json.loads(df.to_json(orient="records", double_precision=15))
+        fixed = bool(self.settings.get("fixed_condition_cases"))
+        out = {"gonio_version": __version__, "settings": self.settings,
+               "criterion": self.CRITERION + (self.FIXED_CRITERION if fixed else "")}
+        if self.cases is not None and len(self.cases) > 1:
+            out["cases"] = {c: rows(df) for c, df in self.cases.items()}
+        else:
+            out["items"] = rows(self.coverage)
+        return out
 
     def table(self) -> str:
         s = self.settings
-        return format_coverage(self.coverage, f"{s['spec']}: {s['trials']} trials, seed "
-                                              f"{s['seed']}, protocol {s['protocol']}, bench "
-                                              f"{s['bench']} (study settings)")
+        head = (f"{s['spec']}: {s['trials']} trials, seed {s['seed']}, protocol "
+                f"{s['protocol']}, bench {s['bench']} (study settings)")
+        if self.cases is None:
+            return format_coverage(self.coverage, head)
+        return "\n".join(format_coverage(df, f"{head}, case {c}: "
+                                             f"{s['case_descriptions'][c]}")
+                         for c, df in self.cases.items())
+
+
+def _study_protocol(spec: Specification, protocol):
+    """(the loaded protocol of ``spec``'s item study, its name in the settings)."""
+    import tempfile
+
+    load = spec.load_protocol or (lambda p: p)
+    if protocol is None and not spec.coverage.reduced:
+        return load(spec.default_protocol), spec.default_protocol
+    if protocol is None:
+        with tempfile.TemporaryDirectory() as d:
+            proto = load(str(reduced_protocol(spec.key, Path(d) / "reduced.toml")))
+        return proto, f"{spec.key} reduced (SPEC.coverage.reduced)"
+    return load(protocol), str(protocol)
 
 
 def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | None = None,
                   protocol: str | None = None, workers: int | None = None,
                   scheduler: str | None = None, batch_size: int | None = None,
-                  show_progress: bool = True) -> CoverageReport:
-    """Coverage of every item of a specification over ``trials`` virtual calibrations.
+                  show_progress: bool = True, cases=None) -> CoverageReport:
+    """Coverage of every item of a specification over ``trials`` virtual calibrations (per
+    case).
 
     ``bench``: a bench name or file (default the specification's), made a study bench
     (:func:`study_bench`); ``protocol``: a protocol file or name (default: the built-in
-    protocol with the study's programme, ``SPEC.coverage.reduced``). Runs through joblib (``workers`` local processes
-    or a Dask ``scheduler``, ``batch_size`` trials per task); trial i is seeded by
-    SeedSequence(``seed``, spawn_key=(``SPEC.coverage.stream``, i)), so the report is the same on any
-    number of workers and any batching.
+    protocol with the study's programme, ``SPEC.coverage.reduced``); ``cases``: the study
+    cases (``SPEC.coverage.cases``; :func:`study_cases`: None → the first, e.g. the rate
+    specifications' ``typeb``). Runs through joblib (``workers`` local processes or a Dask
+    ``scheduler``, ``batch_size`` trials per task); trial i of a case is seeded by
+    SeedSequence(``seed``, spawn_key=(:func:`case_stream`, i)) — the first case's key is
+    ``SPEC.coverage.stream`` — so the report is the same on any number of workers and any
+    batching. A case named in ``SPEC.coverage.fixed_cases`` (one fixed condition) is judged
+    on coverage only (no ``over-wide`` flag).
     """
-    import tempfile
-
     from gonio.limits import check
     from gonio.pipeline.engine import run_parallel, study_workers
     from gonio.progress import Progress
@@ -205,32 +286,26 @@ def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str |
     check("GONIO_MAX_TRIALS", trials, "--trials", unit="calibrations")
     if seed < 0:
         raise GonioError(f"--seed must be >= 0, got {seed}", key="seed")
-    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
-    load = spec.load_protocol or (lambda p: p)
-    b = study_bench(spec, bench)
-    if protocol is None and not spec.coverage.reduced:
-        proto = load(spec.default_protocol)
-        proto_name = spec.default_protocol
-    elif protocol is None:
-        with tempfile.TemporaryDirectory() as d:
-            proto = load(str(reduced_protocol(spec.key, Path(d) / "reduced.toml")))
-        proto_name = f"{spec.key} reduced (SPEC.coverage.reduced)"
-    else:
-        proto = load(protocol)
-        proto_name = str(protocol)
-    job = TrialJob(spec.key, b, proto, int(seed))
-    tasks = [(job, a, min(a + batch_size, trials)) for a in range(0, trials, batch_size)]
-    done: dict[int, dict] = {}
-    prog = Progress(trials, label="validate: trials", force=False) if show_progress else None
+    names = study_cases(spec, cases)
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size, len(names))
+    proto, proto_name = _study_protocol(spec, protocol)
+    benches = {c: study_bench(spec, bench, c or None) for c in names}
+    tasks = [(TrialJob(spec.key, benches[c], proto, int(seed), case_stream(spec, c)), a,
+              min(a + batch_size, trials)) for c in names for a in range(0, trials, batch_size)]
+    done: dict[int, dict[int, dict]] = {}
+    prog = Progress(trials * len(names), label="validate: trials", force=False) \
+        if show_progress else None
     try:
         for batch in run_parallel(run_batch, tasks, workers, scheduler):
-            for i, _, text in batch:
-                done[i] = json.loads(text)
+            for i, _, text, stream in batch:
+                done.setdefault(stream, {})[i] = json.loads(text)
             if prog is not None:
                 prog.update(len(batch))
     finally:
         if prog is not None:
             prog.close()
+    b = benches[names[0]]
+    fixed = [c for c in names if c in spec.coverage.fixed_cases]
     settings = {"spec": spec.key, "trials": trials, "seed": int(seed),
                 "bench": getattr(b, "name", str(b)),
                 "study_bench": f"SPEC.coverage.study_bench = {spec.coverage.study_bench!r}"
@@ -241,4 +316,15 @@ def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str |
                 if getattr(b, "draw_equipment", False) else "as the bench states",
                 "seeding": f"numpy SeedSequence(seed, spawn_key=({spec.coverage.stream}, "
                            "trial index))"}
-    return CoverageReport(settings, coverage_table_from([done[i] for i in range(trials)]))
+    if names != [""] and (len(names) > 1 or names[0] != list(spec.coverage.cases)[0]):
+        settings.update({
+            "cases": names, "case_descriptions": {c: spec.coverage.cases[c] for c in names},
+            "fixed_condition_cases": fixed,
+            "equipment": {c: spec.coverage.cases[c] for c in names},
+            "seeding": {c: f"numpy SeedSequence(seed, spawn_key=({case_stream(spec, c)}, "
+                           "trial index))" for c in names}})
+    tables = {c: coverage_table_from([done[case_stream(spec, c)][i] for i in range(trials)],
+                                     judge_spread=c not in fixed) for c in names}
+    if "cases" not in settings:
+        return CoverageReport(settings, tables[names[0]])
+    return CoverageReport(settings, tables[names[0]], tables)

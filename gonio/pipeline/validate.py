@@ -315,13 +315,14 @@ def validate(trials: int, *, spec: str | Specification = DEFAULT_KEY, seed: int 
     if s.coverage.engine == "items":
         from gonio.pipeline.coverage import coverage_validate
 
+        cases = options.pop("cases", None)
         if options or partial_dir is not None or resume:
             bad = sorted(options) + (["resume"] if resume else [])
             raise GonioError(f"{', '.join(bad) or 'partial results'} do not apply to the item "
                              f"study of {s.key}", key="--spec")
         return coverage_validate(s.key, trials, seed=seed, bench=bench, protocol=protocol,
                                  workers=workers, scheduler=scheduler, batch_size=batch_size,
-                                 show_progress=show_progress)
+                                 show_progress=show_progress, cases=cases)
     if s.coverage.study is None:
         raise GonioError(f"{s.key} has no coverage study (SPEC.coverage.study is None)",
                          key="--spec")

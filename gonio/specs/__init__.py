@@ -139,6 +139,13 @@ class Coverage:
         effects its truth leaves out). None: the bench as loaded.
     options : frozenset
         The ``gonio validate`` options the engine takes beyond the common ones.
+    cases : dict
+        ``"items"`` engine: the study's cases, name → what the bench does in it (``gonio
+        validate --cases``; ``study_bench(name, case=…)`` makes each case's bench; the first
+        is the default and keeps the seed stream ``stream``). Empty: one case, no ``--cases``.
+    fixed_cases : frozenset
+        The cases of ``cases`` at one fixed condition (each Type B effect at its bound): judged
+        on coverage only, z's spread information (a Type B line is one fixed offset there).
     study : callable or None
         ``"cases"`` engine: ``study(trials, *, seed, bench, protocol, **options)`` → the
         planned study: ``settings`` (dict), ``jobs`` (part → picklable job whose
@@ -153,6 +160,8 @@ class Coverage:
     study_bench: Callable[..., Any] | None = None
     options: frozenset = frozenset()
     study: Callable[..., Any] | None = None
+    cases: dict = field(default_factory=dict)
+    fixed_cases: frozenset = frozenset()
 
     def __post_init__(self):
         where = "Coverage"
@@ -164,6 +173,12 @@ class Coverage:
                 isinstance(k, str) and isinstance(v, dict) for k, v in self.reduced.items()):
             raise _field_error(where, "reduced", "a dict {section: {key: value}}", self.reduced)
         _set_strings(self, where, "options", frozenset)
+        _set_strings(self, where, "fixed_cases", frozenset)
+        if not isinstance(self.cases, dict) or not all(
+                isinstance(k, str) and isinstance(v, str) for k, v in self.cases.items()):
+            raise _field_error(where, "cases", "a dict {case: description}", self.cases)
+        if not self.fixed_cases <= set(self.cases):
+            raise _field_error(where, "fixed_cases", "names of cases", self.fixed_cases)
         for name in ("study_bench", "study"):
             _check_callable(self, where, name)
         if self.engine == "cases" and self.study is None:

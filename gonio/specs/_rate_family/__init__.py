@@ -27,7 +27,9 @@ def rate_specification(package: str, **fields):
     coverage = Coverage(engine="items", stream=fields.pop("stream"),
                         reduced=fields.pop("reduced"),
                         study_bench=lazy("gonio.specs._rate_family.simulate:study_bench",
-                                         **fields.pop("study_bench_options", {})))
+                                         **fields.pop("study_bench_options", {})),
+                        options=frozenset({"cases"}), cases=dict(STUDY_CASES),
+                        fixed_cases=frozenset({"worst"}))
     return Specification(
         simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", run),
         run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", run),
@@ -35,4 +37,35 @@ def rate_specification(package: str, **fields):
         outputs=ITEM_RENDERER, default_bench="mems-adxrs610",
         certificate_content=f"{package}.certificate",
         readings_columns=lazy("gonio.formats.rate_readings:read_columns"),
-        calibrate_options=frozenset({"protocol", "dcc"}), **fields)
+        calibrate_options=frozenset({"protocol", "dcc"}),
+        arguments={"validate": "gonio.specs._rate_family:add_validate_options"}, **fields)
+
+
+#: The cases of the rate specifications' coverage study (``gonio validate --cases``):
+#: how the study bench's equipment is set per trial (:meth:`gonio.bench.rate_gyro.RateBench.for_trial`).
+STUDY_CASES = {
+    "typeb": "every Type B effect of the equipment the budgets carry drawn per trial "
+             "(gonio.bench.equipment.draw_equipment): the table's rate error and the "
+             "voltmeter's gain normal with their certificates' u, the chamber's deviation "
+             "per set point uniform within +-2 C, the fixture misalignment uniform within "
+             "+-0.05 deg, the gyro's place in the volume, the phases of the chamber's "
+             "fluctuation and of the table's ripple",
+    "worst": "every Type B effect at its bound (gonio.bench.equipment.worst_equipment): the "
+             "table's rate error and the voltmeter's gain at +2u (the certificates' U; Table "
+             "2's 0.05 % for the table), both raising K; the chamber's deviation +2 C at "
+             "every set point above the gyro's reference temperature and -2 C at or below it "
+             "(every span across it stretched by 4 C); the chamber's fluctuation and "
+             "uniformity and the table's ripple at Table 2's 1 C, 2 C and 0.05 % (the gyro "
+             "at the volume's warm end); the fixture misalignment at +-0.05 deg with the sign "
+             "of the gyro's cross-axis sensitivity; the two phases drawn per trial as in typeb",
+}
+
+
+def add_validate_options(group) -> None:
+    """The rate specifications' ``gonio validate`` option: ``--cases`` (the study's cases,
+    :data:`STUDY_CASES`; the same option as the optical draft's bench cases)."""
+    group.add_argument("--cases", default=None,
+                       help="comma-separated study cases, or 'all': for the rate "
+                            "specifications typeb (default; the equipment's Type B errors "
+                            "drawn per trial) and worst (each at its bound, at the sign that "
+                            "moves the items most; judged on coverage, z sd information)")

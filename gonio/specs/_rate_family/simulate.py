@@ -44,7 +44,8 @@ def run_trial(run, bench, protocol, seed: int):
 
 
 def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
-                cross_axis: bool = False, power_on_transient: bool = False):
+                cross_axis: bool = False, power_on_transient: bool = False,
+                case: str = "typeb"):
     """The rate bench of the coverage study: ``name`` with the power-on transient, the thermal
     lag (τ = 1 s) and the cross-axis sensitivity switched off, the three deterministic,
     history-dependent effects the truth formulas leave out; every random term (noise,
@@ -71,10 +72,21 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
     y) and the phases of the chamber's fluctuation and of the table's once-per-revolution
     ripple (uniform); :func:`gonio.bench.equipment.draw_equipment`. Held at one value instead, a type-B
     error cannot spread z, and a U made of it always looks over-wide.
-    ``draw_equipment=False``: the bench file's one realisation in every trial."""
+    ``draw_equipment=False``: the bench file's one realisation in every trial.
+
+    ``case``: the study case (``gonio validate --cases``, :data:`gonio.specs._rate_family.STUDY_CASES`):
+    ``"typeb"`` the draws above, ``"worst"`` every one of those errors at its bound instead
+    (:func:`gonio.bench.equipment.worst_equipment`)."""
+    from gonio.errors import GonioError
+    from gonio.specs._rate_family import STUDY_CASES
+
+    if case not in STUDY_CASES:
+        raise GonioError(f"unknown case {case!r} (known: {', '.join(STUDY_CASES)})",
+                         key="cases")
     b = load_rate_bench(name)
     g = replace(b.gyro, thermal_tau_s=1.0,
                 warmup_bias_dps=b.gyro.warmup_bias_dps if power_on_transient else 0.0)
     if not cross_axis:
         g = replace(g, cross_axis_x=0.0, cross_axis_y=0.0)
-    return replace(b, gyro=g, draw_equipment=bool(draw_equipment))
+    return replace(b, gyro=g, draw_equipment=bool(draw_equipment) or case == "worst",
+                   equipment_case=case)
