@@ -54,7 +54,7 @@ STUDY_CASES = {
              "table's rate error and the voltmeter's gain at +2u (the certificates' U; Table "
              "2's 0.05 % for the table), both raising K; the chamber's deviation +2 C at "
              "every set point above the gyro's reference temperature and -2 C at or below it "
-             "(every span across it stretched by 4 C); the chamber's fluctuation and "
+             "(every temperature span across it stretched); the chamber's fluctuation and "
              "uniformity and the table's ripple at Table 2's 1 C, 2 C and 0.05 % (the gyro "
              "at the volume's warm end); the fixture misalignment at +-0.05 deg with the sign "
              "of the gyro's cross-axis sensitivity; the two phases drawn per trial as in typeb",
