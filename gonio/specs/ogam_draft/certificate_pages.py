@@ -47,7 +47,7 @@ from gonio.result.findings import stated_findings
 from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
                                            conformity_for, detail, e_budget, e_by_interval,
-                                           e_interval_segments, followed,
+                                           e_draft_segments, e_interval_segments, followed,
                                            interval_cell, item_names, item_path, k_table_note,
                                            e_table_note, k_tilt_note,
                                            method_rows, reading_note, segments,
@@ -127,7 +127,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
 
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
-    rrows = _result_rows(res, L, U, lang)
+    rrows, beside = _result_rows(res, L, U, lang)
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
@@ -140,11 +140,10 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
         dr = unc.get("draft_reading")
-        if by_iv:        # E's one statement, its interval, and the draft's reading beside
-            add("p", e_interval_segments(res, L))
-        if unc.get("budget_kind") == "physical" and dr:      # which budget is certified
-            add("p", [L["U_certified_physical"].format(U=display("U", dr["U_arcsec"]),
-                                                       k=display("k", dr["k"]))])
+        if by_iv:        # E's one statement, its interval (the draft's reading: beside table)
+            add("p", e_interval_segments(res, L, beside=False))
+        if unc.get("budget_kind") == "physical" and dr:      # which budget U is of
+            add("p", [L["U_certified_physical"]])
         elif unc.get("budget_kind") == "draft":
             add("p", [L["U_certified_draft_interval" if by_iv else "U_certified_draft"]])
         ks = unc.get("k_source")                 # say where k comes from
@@ -152,6 +151,10 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
+    if beside:                  # every reading beside the results: one table, not certified
+        add("sub", L["beside_title"])
+        add("table", ([L["item"], L["beside_reading"]], beside),
+            {"widths": (0.26, 0.74), "id": "beside"})
     legend = interval_legend(res["items"], L)  # what each item's interval is
     if legend:
         add("p", [legend])
@@ -233,11 +236,14 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
         add(b.kind, b.data, b.extra)
 
 
-def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
+def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> tuple[list, list]:
     """The results table's rows (Annex B): each item with its U, k and coverage
     probability (an item stated by its coverage interval: that interval beside the value and
-    no U), or the reason it was not measured."""
-    rrows = []
+    no U), or the reason it was not measured; and the rows of the table beside it (item, its
+    readings and notes given beside and not certified: the draft's readings, the corrections
+    beyond the draft, :func:`_beside_notes`). A result cell holds the item's one statement
+    alone (with E's sign and point, R's point, and why a range is stated by its bound)."""
+    rrows, beside = [], []
     for i, name in enumerate(item_names(res), 1):
         item = res["items"][name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
@@ -252,38 +258,6 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         cell: list = [st["value"]]
         if st["signed"] is not None:
             cell += [L["semi"], *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
-            if name == "angle_deviation" and detail(res, name, "tilt_correction"):
-                cell += [L["semi"], *segments(L["note_e_tilt"], v=_num(
-                    res, item_path(name, "estimates.draft.value"), "atU", U))]
-            if name == "angle_deviation" and detail(res, name, "table_calibration"):
-                cell += [L["semi"], *e_table_note(res, L)]
-        elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
-            cell += [L["semi"], *segments(L["note_zero_range"],
-                                     v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]
-            if detail(res, name, "stated") == "draft" and \
-                    (detail(res, name, "estimates") or {}).get("model"):
-                cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
-                    res, item_path(name, "estimates.model.value"), "sig3", U))]
-        elif name == "scale_factor" and (detail(res, name, "tilt_correction")
-                                         or detail(res, name, "table_calibration")):
-            if detail(res, name, "tilt_correction"):
-                cell += [L["semi"], *k_tilt_note(res, L)]
-            if detail(res, name, "table_calibration"):
-                cell += [L["semi"], *k_table_note(res, L)]
-        elif name == "scale_factor_nonlinearity" and detail(res, name, "estimates"):
-            cell += [L["semi"], *segments(L["note_kl_draft"], v=_num(
-                res, item_path(name, "estimates.draft.value"), "sig3", U))]
-            if range_table_note(res, name, L):
-                cell += [L["semi"], *range_table_note(res, name, L)]
-        elif name in ("rate_consistency", "pointing_consistency"):
-            cell += [L["semi"], *segments(L["note_spread"],
-                                     v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
-            if detail(res, name, "estimates"):
-                note = "note_cv_draft" if name == "rate_consistency" else "note_cg_draft"
-                cell += [L["semi"], *segments(L[note], v=_num(
-                    res, item_path(name, "estimates.draft.value"), "sig3", U))]
-            if range_table_note(res, name, L):
-                cell += [L["semi"], *range_table_note(res, name, L)]
         elif name == "repeatability" and detail(res, name, "position_deg") is not None:
             opening, _, closing = L["paren"].partition("{x}")
             cell += [opening, *segments(L["note_at"],
@@ -295,7 +269,54 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         elif st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
             cell[1:1] = [L["semi"] + interval_cell(st, lang)]
         rrows.append([str(i), L[name], clause_text(item["clause"], L), cell, u_cell(st, L), unit])
-    return rrows
+        notes = _beside_notes(res, name, L, U)
+        if notes:
+            beside.append([L[name], notes])
+    return rrows, beside
+
+
+def _beside_notes(res: dict, name: str, L: dict, U: float | None) -> list:
+    """Item ``name``'s readings and notes given beside its statement and not certified, as
+    :func:`segments` joined by L["semi"]: the draft's own reading (K_l, C_v, C_g, E, the 7.1
+    mean uncorrected), B_s's range/T and noise model, C_v's and C_g's spread, and the
+    corrections beyond the draft (tilt, table calibration). [] where there is none."""
+    parts: list[list] = []
+    e_draft = (e_draft_segments(res, L)        # max|E_i| ± U of Annex A alone
+               if name == "angle_deviation" and U is not None and (
+                   e_by_interval(res) or e_budget(res).get("budget_kind") == "physical")
+               else [])
+    if name == "angle_deviation" and detail(res, name, "tilt_correction"):
+        parts.append(segments(L["note_e_tilt_only"]) if e_draft else segments(
+            L["note_e_tilt"], v=_num(res, item_path(name, "estimates.draft.value"), "atU", U)))
+    if name == "angle_deviation" and detail(res, name, "table_calibration"):
+        parts.append(e_table_note(res, L))
+    parts.append(e_draft)
+    if name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
+        parts.append(segments(L["note_zero_range"],
+                              v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U)))
+        if detail(res, name, "stated") == "draft" and \
+                (detail(res, name, "estimates") or {}).get("model"):
+            parts.append(segments(L["note_zero_model"], v=_num(
+                res, item_path(name, "estimates.model.value"), "sig3", U)))
+    if name == "scale_factor" and detail(res, name, "tilt_correction"):
+        parts.append(k_tilt_note(res, L))
+    if name == "scale_factor" and detail(res, name, "table_calibration"):
+        parts.append(k_table_note(res, L))
+    if name in ("rate_consistency", "pointing_consistency"):
+        parts.append(segments(L["note_spread"],
+                              v=_num(res, item_path(name, "spread_arcsec"), "atU", U)))
+    if name in ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency") \
+            and detail(res, name, "estimates"):
+        note = {"scale_factor_nonlinearity": "note_kl_draft",
+                "rate_consistency": "note_cv_draft"}.get(name, "note_cg_draft")
+        parts.append(segments(L[note], v=_num(
+            res, item_path(name, "estimates.draft.value"), "sig3", U)))
+    if name in ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency"):
+        parts.append(range_table_note(res, name, L))
+    out: list = []
+    for p in (p for p in parts if p):
+        out += ([L["semi"]] if out else []) + list(p)
+    return out
 
 
 def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:

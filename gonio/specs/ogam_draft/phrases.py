@@ -326,6 +326,9 @@ LABELS: dict[str, dict[str, str]] = {
                           "(Annex A, beside, not stated): {v}″",
                     "zh": "各 E_ij 已按实测倾斜修正倾斜与地球自转角速度的耦合（草案以外）；"
                           "按草案（附录 A）的测得值（并列给出，不作结果）：{v}″"},
+    "note_e_tilt_only": {"en": "every E_ij corrected for the tilt × Earth-rate coupling at the "
+                               "measured tilt, beyond the draft",
+                         "zh": "各 E_ij 已按实测倾斜修正倾斜与地球自转角速度的耦合（草案以外）"},
     "note_e_table": {"en": "every E_ij's reference angle corrected by the table calibration "
                            "{f} and E_ij read with the table-corrected K, beyond the draft",
                      "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
@@ -450,18 +453,30 @@ LABELS: dict[str, dict[str, str]] = {
     "dist_rectangular-shifted-product": {"en": "product of two rectangulars",
                                          "zh": "两均匀分布之积"},
     "U_certified_physical": {
-        "en": "Certified: U of this calibration's physical budget (the draft's Annex A lines and "
-              "the lines marked \"beyond the draft\", budget below). The draft's reading, its "
-              "Annex A budget alone, gives U = {U}″ (k = {k}); it is given beside and not "
-              "certified: it leaves out the tilt × Earth-rate coupling and the errors of the "
-              "7.1 K, which conditions the draft allows contain.",
-        "zh": "所给 U 按本次校准的物理模型评定（附录A各分量及标“超出草案”的分量，见下方不确定度分量表）。"
-              "按规范草案的理解，仅用附录A评定得 U = {U}″（k = {k}），仅供参考，不作为校准结果："
-              "它未计入倾斜与地球自转角速度的耦合及 7.1 标度因数的误差，而草案允许的条件下这些影响存在。"},
+        "en": "Each point's U above is that of this calibration's physical budget (the draft's "
+              "Annex A lines and the lines marked \"beyond the draft\", budget below). The "
+              "draft's Annex A budget alone (its U is in the table of the readings beside the "
+              "results, not certified) leaves out the tilt × Earth-rate coupling and the errors "
+              "of the 7.1 K, which conditions the draft allows contain.",
+        "zh": "上述各点的 U 按本次校准的物理模型评定（附录A各分量及标“超出草案”的分量，见下方不确定度"
+              "分量表）。仅按规范草案附录A的评定（其 U 见结果旁列的读数表，不作为校准结果）未计入倾斜"
+              "与地球自转角速度的耦合及 7.1 标度因数的误差，而草案允许的条件下这些影响存在。"},
     "U_certified_draft": {
-        "en": "Certified: U of the draft's Annex A budget as the draft states it (the draft's "
-              "reading); the lines beyond the draft are not applied.",
-        "zh": "所给 U 按规范草案附录A评定（草案的理解），未计入超出草案的分量。"},
+        "en": "The U above is that of the draft's Annex A budget as the draft states it; the "
+              "lines beyond the draft are not applied.",
+        "zh": "上述 U 按规范草案附录A评定（草案的理解），未计入超出草案的分量。"},
+    "beside_title": {
+        "en": "The draft's readings and the notes on the results, given beside and not certified",
+        "zh": "草案的读数及结果的说明（并列给出，不作为校准结果）"},
+    "beside_reading": {"en": "Reading or note (not certified)", "zh": "读数或说明（不作为校准结果）"},
+    "beside_E_draft": {
+        "en": "the draft's reading as measured (none of the corrections beyond the draft), "
+              "max|E_i| ± U (7.4, Annex A budget alone): {E} ± {U}″ (k = {k})",
+        "zh": "按规范草案的测得值（未作草案以外的修正）max|E_i| ± U（7.4，仅按附录A评定）："
+              "{E} ± {U}″（k = {k}）"},
+    "beside_U_draft": {
+        "en": "U of the draft's Annex A budget alone: {U}″ (k = {k})",
+        "zh": "仅按规范草案附录A评定的 U：{U}″（k = {k}）"},
     "E_dcc_standard_mu": {
         "en": "The interval's si:valueStandardMU is the standard uncertainty of max|E_i| by the "
               "law of propagation at the estimates (JCGM 100 5.1.2): u_c of E_i at {p}°, the "

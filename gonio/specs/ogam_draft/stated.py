@@ -197,11 +197,13 @@ def stated_item(res: dict, name: str) -> dict:
     return out
 
 
-def e_interval_segments(res: dict, L: dict) -> list:
+def e_interval_segments(res: dict, L: dict, beside: bool = True) -> list:
     """The paragraph under the results saying how E is stated (:func:`e_by_interval`): the
-    interval of max|E_i| as the statement gives its ends, and the draft's reading
-    max|E_i| ± U (7.4, Annex A: ``extra.uncertainty.draft_reading``) beside, not certified;
-    as :func:`segments` in ``L``'s language. [] when E is not stated by that interval."""
+    interval of max|E_i| as the statement gives its ends, and (``beside``) the draft's
+    reading max|E_i| ± U (7.4, Annex A: ``extra.uncertainty.draft_reading``) beside, not
+    certified; as :func:`segments` in ``L``'s language. [] when E is not stated by that
+    interval. The certificate gives the draft's reading in its table of the readings beside
+    the results (:func:`e_draft_segments`), not in this paragraph (``beside`` False)."""
     if not e_by_interval(res):
         return []
     st = stated_item(res, "angle_deviation")
@@ -209,17 +211,38 @@ def e_interval_segments(res: dict, L: dict) -> list:
     if st["interval"]["statement"].upper is not None:     # one-sided: from 0, as stated
         lo = "0"
     dr = e_budget(res).get("draft_reading") or {}
-    if dr.get("U_arcsec") is None:      # no draft reading beside: the interval's sentence alone
+    if dr.get("U_arcsec") is None or not beside:   # the interval's sentence alone
         return [L["E_by_interval"].format(lo=lo, hi=hi, E="—", U="—", k="—")
                 .partition(" The draft's")[0].partition("按规范草案")[0]]
+    return segments(L["E_by_interval"].replace("{lo}", lo).replace("{hi}", hi),
+                    **_e_draft_nums(res, dr))
+
+
+def _e_draft_nums(res: dict, dr: dict) -> dict:
+    """The draft's reading of E, max|E_i| ± U (``extra.uncertainty.draft_reading``), as the
+    Nums E, U and k (max|E_i| to the decimal place of the draft's U)."""
     src = ("extra.uncertainty.draft_reading.E_arcsec" if dr.get("E_arcsec") is not None
            else item_path("angle_deviation", "max_abs_arcsec"))
     e = dr.get("E_arcsec") if dr.get("E_arcsec") is not None else detail(
         res, "angle_deviation", "max_abs_arcsec")
-    return segments(L["E_by_interval"].replace("{lo}", lo).replace("{hi}", hi),
-                    E=num(res, src, rule_at_U(float(dr["U_arcsec"]),
-                                              ITEM_SIG_DIGITS.get("angle_deviation", 3),
-                                              float(e), "pmdec")),
+    return {"E": num(res, src, rule_at_U(float(dr["U_arcsec"]),
+                                         ITEM_SIG_DIGITS.get("angle_deviation", 3),
+                                         float(e), "pmdec")),
+            "U": num(res, "extra.uncertainty.draft_reading.U_arcsec", "U"),
+            "k": num(res, "extra.uncertainty.draft_reading.k", "k")}
+
+
+def e_draft_segments(res: dict, L: dict) -> list:
+    """The draft's reading of E as the certificate's table of the readings beside the
+    results gives it, as :func:`segments`: max|E_i| ± U of the draft's Annex A budget alone
+    (E stated by its interval, :func:`e_by_interval`), or that budget's U alone (E stated with
+    the physical budget's U); [] without a draft reading."""
+    dr = e_budget(res).get("draft_reading") or {}
+    if dr.get("U_arcsec") is None:
+        return []
+    if e_by_interval(res):
+        return segments(L["beside_E_draft"], **_e_draft_nums(res, dr))
+    return segments(L["beside_U_draft"],
                     U=num(res, "extra.uncertainty.draft_reading.U_arcsec", "U"),
                     k=num(res, "extra.uncertainty.draft_reading.k", "k"))
 

@@ -1,0 +1,115 @@
+"""One statement per result cell, one p and one set of measurand conditions in every output,
+checked from the outside: the CLI's demo is run and every output it writes is parsed
+(certificate HTML, en and zh; summary.txt; results.json; tables/items.csv; the DCC XML).
+
+* The optical certificate's result cells hold the item's statement alone: no reading of the
+  draft, no range/T, no spread, no correction beside it; every such reading is in the one
+  labelled table beside the results (``id="beside"``), each number equal to results.json.
+  The line under the table names U as what it is (each point's U), not "Certified".
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+
+import pytest
+
+from gonio.cli import main
+
+SUP = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
+
+
+def _number(text: str) -> float:
+    """A printed number ("4.36×10⁻⁵", "−0.18", "76434.844") as a float."""
+    t = html.unescape(text).replace("−", "-").replace("\u2009", "").replace("±", "")
+    mant, _, exp = t.partition("×10")
+    return float(mant) * (10.0 ** int(exp.translate(SUP)) if exp else 1.0)
+
+
+def _last_digit(text: str) -> float:
+    """Half a unit of the last digit printed (the rounding a printed number may carry)."""
+    t = html.unescape(text).replace("−", "-")
+    mant, _, exp = t.partition("×10")
+    dec = len(mant.partition(".")[2])
+    return 0.5 * 10.0 ** (-dec) * (10.0 ** int(exp.translate(SUP)) if exp else 1.0)
+
+
+def _get(res: dict, src: str):
+    node = res
+    for part in src.split("."):
+        node = node[int(part)] if isinstance(node, list) else node[part]
+    return node
+
+
+def _table(page: str, ident: str) -> str:
+    m = re.search(rf'<table id="{ident}">(.*?)</table>', page, re.S)
+    assert m, ident
+    return m.group(1)
+
+
+def _spans(fragment: str) -> list[tuple[str, str]]:
+    return re.findall(r'<span class="num" data-src="([^"]+)"[^>]*>([^<]*)</span>', fragment)
+
+
+def _text(fragment: str) -> str:
+    text = html.unescape(re.sub(r"<[^>]+>", "", fragment))
+    return re.sub(r"[\u00a0\u2009\u202f]", " ", text)
+
+
+@pytest.fixture(scope="module")
+def optical(tmp_path_factory):
+    out = {}
+    for lang in ("en", "zh"):
+        d = tmp_path_factory.mktemp("ogam") / lang
+        assert main(["demo", "--spec", "ogam-draft", "--seed", "1", "--out", str(d),
+                     "--lang", lang]) == 0
+        out[lang] = {"html": (d / "certificate.html").read_text(encoding="utf-8"),
+                     "res": json.loads((d / "results.json").read_text(encoding="utf-8"))}
+    return out
+
+
+#: The fields of an item a result cell may show: its statement (value, max|E_i| and its
+#: sign, the interval's ends or bound, U, k) and the point it is at.
+CELL_FIELDS = re.compile(r"^items\.[a-z_]+\.(value|upper_bound|uncertainty\.[A-Za-z_.0-9]+|"
+                         r"details\.(max_abs_arcsec|position_deg))$")
+#: What only the table beside the results may show.
+BESIDE = re.compile(r"estimates\.|range_deg_per_h|spread_arcsec|tilt_correction|"
+                    r"table_calibration|draft_reading")
+
+
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_optical_result_cells_hold_the_statement_alone(optical, lang):
+    page, res = optical[lang]["html"], optical[lang]["res"]
+    cells = _table(page, "results")
+    for src, _ in _spans(cells):
+        assert CELL_FIELDS.match(src), src
+    words = ("beside", "not stated", "draft", "range/T", "uncorrected", "spread",
+             "并列", "草案", "极差", "未修正")
+    for word in words:
+        assert word not in _text(cells), word
+    # every reading that was beside a statement is in the one table beside the results,
+    # and nowhere else on the page; each number is results.json's, rounded
+    beside = _table(page, "beside")
+    shown = {src: text for src, text in _spans(beside)}
+    for src, text in shown.items():
+        raw = _get(res, src)
+        raw = abs(raw) if "±" in text else raw       # max|E_i| ± U: the magnitude
+        assert abs(_number(text) - raw) <= _last_digit(text) * 1.000001, (src, text, raw)
+    rest = page.replace(beside, "")
+    assert not [s for s, _ in _spans(rest) if BESIDE.search(s)]
+    items = res["items"]
+    want = {f"items.{k}.details.estimates.draft.value"
+            for k in ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency")
+            if items[k]["measured"] and (items[k]["details"].get("estimates") or {}).get("draft")}
+    if items["zero_stability"]["measured"]:
+        want.add("items.zero_stability.details.range_deg_per_h")
+    if (res["extra"]["uncertainty"].get("draft_reading") or {}).get("U_arcsec") is not None:
+        want.add("extra.uncertainty.draft_reading.U_arcsec")
+    assert want and want <= set(shown), want - set(shown)
+    title = ("The draft's readings and the notes on the results, given beside and not "
+             "certified" if lang == "en" else "草案的读数及结果的说明（并列给出，不作为校准结果）")
+    assert _text(page).count(title) == 1
+    # the line under the results names U for what it is: no "Certified:" on the page
+    assert "Certified:" not in _text(page)
