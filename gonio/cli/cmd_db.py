@@ -52,6 +52,24 @@ def register(sub) -> None:
                         "$GONIO_USER), with their password in $GONIO_PASSWORD or asked")
     add_attach_options(q)
     q.set_defaults(func=run_attach)
+    q = dsub.add_parser("add-standard",
+                        help="register a reference standard or piece of bench equipment "
+                             "(technician); one past its due date only --out-of-service")
+    add_store_options(q)
+    q.add_argument("identifier", help="its identifier (unique)")
+    q.add_argument("--name", required=True)
+    q.add_argument("--due-on", required=True, metavar="YYYY-MM-DD")
+    q.add_argument("--calibrated-on", default=None, metavar="YYYY-MM-DD")
+    q.add_argument("--accuracy", default="")
+    q.add_argument("--certificate", default="", help="its own calibration certificate")
+    q.add_argument("--traceability", default="")
+    q.add_argument("--out-of-service", default="", metavar="REASON",
+                   help="one already past its due date: registered out of service (no "
+                        "calibration can use it until its recalibration is recorded), the "
+                        "reason in its record")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user registering it (technician; default $GONIO_USER)")
+    q.set_defaults(func=run_add_standard)
     q = dsub.add_parser("register-table-calibration",
                         help="put a rotary table's calibration file into the laboratory's "
                              "register (technician)")
@@ -315,6 +333,28 @@ def attach_of(args) -> dict:
     if args.environment_from_readings:
         out["environment_from_readings"] = True
     return out
+
+
+def run_add_standard(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        actor = importing_user(store, args.user)
+        if actor is None:
+            raise GonioError("give the records user registering it (--user or $GONIO_USER)",
+                             key="--user")
+        st = services.add_standard(
+            store, actor, name=args.name, identifier=args.identifier, due_on=args.due_on,
+            calibrated_on=args.calibrated_on, accuracy=args.accuracy,
+            certificate=args.certificate, traceability=args.traceability,
+            out_of_service=args.out_of_service)
+        print(f"standard {st.id}: {st.identifier} {st.name}, due on {st.due_on}"
+              + (f"; registered out of service (past its due date): {st.out_of_service}"
+                 if st.out_of_service else ""))
+    finally:
+        store.close()
+    return 0
 
 
 def run_register_table_calibration(args) -> int:

@@ -431,10 +431,38 @@ def register_instrument(store, actor: User, *, customer_id: int, serial: str, sp
     return inst
 
 
+def past_due(what: str, due: _dt.date, today: _dt.date, reason: str, how: str) -> str:
+    """Registering equipment whose due date ``due`` is before ``today`` (ISO/IEC 17025 6.4.7,
+    6.4.13): refused with one line naming ``what`` and the date unless the person states
+    ``reason`` (``how``: the option or field that states it); the reason, stripped, to be
+    recorded with the entry ("" for equipment registered in time).
+
+    >>> import datetime as dt
+    >>> past_due("standard RT-07", dt.date(2026, 12, 1), dt.date(2026, 12, 1), "", "x")
+    ''
+    >>> past_due("standard RT-07", dt.date(2025, 1, 1), dt.date(2026, 12, 1), "", "--out-of-service")
+    Traceback (most recent call last):
+    gonio.errors.GonioError: key due_on: standard RT-07 was due on 2025-01-01, before today (2026-12-01): equipment past its due date is registered only with the reason stated (--out-of-service)
+    """
+    reason = text(reason, "reason", max_len=MAX_TEXT)
+    if due >= today:
+        return ""
+    if not reason:
+        raise GonioError(f"{what} was due on {due}, before today ({today}): equipment past its "
+                         f"due date is registered only with the reason stated ({how})",
+                         key="due_on")
+    return reason
+
+
 def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                  calibrated_on=None, accuracy: str = "", certificate: str = "",
-                 traceability: str = "") -> Standard:
-    """A reference standard or piece of bench equipment with its due date (technician)."""
+                 traceability: str = "", out_of_service: str = "") -> Standard:
+    """A reference standard or piece of bench equipment with its due date (technician). One
+    already past its due date is refused (:func:`past_due`) unless ``out_of_service`` states
+    why it is registered: then it is registered out of service, the reason in its record
+    (``out_of_service``), and no calibration can use it while its due date is past
+    (:func:`unusable_standard`); its recalibration recorded later (:func:`update_standard`,
+    a new due date) puts it in use."""
     require(actor, "technician")
     st = Standard(name=text(name, "name", required=True),
                   identifier=text(identifier, "identifier", required=True),
@@ -442,6 +470,11 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   traceability=text(traceability, "traceability"),
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
+    today = utcnow().date()
+    st.out_of_service = past_due(f"standard {st.identifier}", st.due_on, today,
+                                 out_of_service or "",
+                                 "register it out of service with the reason: --out-of-service "
+                                 "REASON, or the form's 'Out of service' field")
     return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
                    "a standard with this identifier exists (record its recalibration by "
                    "editing it: new certificate and due date)", "identifier")
@@ -992,7 +1025,10 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     it would be in force on a day whose calibration used another entry). Nothing
     registered is changed or removed; a wrong entry is withdrawn
     (:func:`ask_withdrawal`). The file must read as a table calibration
-    (:func:`_readable_table_calibration`)."""
+    (:func:`_readable_table_calibration`). An entry already past its due date is a record of
+    the register's history (a table calibration, not equipment: :func:`add_standard` refuses
+    equipment past due), in force on no calibration day after it
+    (:func:`table_calibration_state`)."""
     require(actor, "technician")
     start = date_value(valid_from, "valid_from", required=True)
     due = date_value(due_on, "due_on", required=True)
@@ -1506,8 +1542,10 @@ def unusable_standard(st: Standard, day: _dt.date) -> str:
         return f"standard {st.identifier} was retired on {st.retired_on} (the calibration " \
                f"date is {day})"
     if st.due_on < day:
+        why = getattr(st, "out_of_service", "")
         return f"standard {st.identifier} was due on {st.due_on} (before the calibration " \
-               f"date {day}): calibrate it first"
+               f"date {day}): calibrate it first" + (
+                   f" (registered out of service: {why})" if why else "")
     return ""
 
 

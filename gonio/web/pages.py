@@ -337,7 +337,7 @@ async def standards_add(request: Request, session: Session):
     try:
         services.add_standard(_store(request), user, **{k: data.get(k) for k in (
             "name", "identifier", "due_on", "calibrated_on", "accuracy", "certificate",
-            "traceability")})
+            "traceability", "out_of_service")})
     except GonioError as exc:
         return render(request, "standards.html", user, csrf, status_code=400, error=str(exc),
                       standards=queries.standards(_store(request)), today=_dt.date.today())

@@ -67,7 +67,8 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
     # a standard past its due date on the calibration date, one retired: refused by name
     old = services.add_standard(store, people["tech"], name="autocollimator",
                                 identifier="AC-OLD", due_on=day - dt.timedelta(days=1),
-                                calibrated_on=day - dt.timedelta(days=400))
+                                calibrated_on=day - dt.timedelta(days=400),
+                                out_of_service="overdue, kept for its history")
     with pytest.raises(GonioError, match=f"AC-OLD was due on {day - dt.timedelta(days=1)}"):
         services.attach_conditions(store, people["tech"], cid, standard_ids=[old.id])
     # an environment the readings contradict (they say 20.0 °C)
@@ -424,7 +425,7 @@ def test_db_import_matches_the_lab_files_standards(tmp_path, computed_folder, be
     try:
         services.add_standard(st, services.user(st, "alice"), name="autocollimator",
                               identifier="AC-OLD", calibrated_on=dt.date(2019, 1, 1),
-                              due_on=dt.date(2020, 1, 1))
+                              due_on=dt.date(2020, 1, 1), out_of_service="overdue since 2020")
     finally:
         st.close()
     folder = tmp_path / "run"

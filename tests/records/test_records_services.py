@@ -157,7 +157,7 @@ def test_creator_may_not_review_own_calibration(store, people, computed_folder,
 def test_overdue_standard_refused(store, people, bench_readings):
     inst, _ = setup_instrument(store, people)
     old = services.add_standard(store, people["tech"], name="autocollimator", identifier="AC-1",
-                                due_on="2020-01-01")
+                                due_on="2020-01-01", out_of_service="sent for repair")
     sha, _ = services.store_file(store, open(bench_readings[0], "rb"))
     with pytest.raises(GonioError, match="AC-1 was due"):
         services.create_calibration(store, people["tech"], instrument_id=inst.id,

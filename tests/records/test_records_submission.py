@@ -63,7 +63,7 @@ def test_standard_and_environment_required(store, bench_readings):
     with pytest.raises(GonioError, match="enter the relative humidity"):
         submit(sqlite_store, tech, inst, sha, [std.id], humidity_pct=None)
     old = services.add_standard(sqlite_store, tech, name="autocollimator", identifier="AC-1",
-                                due_on="2025-11-19")
+                                due_on="2025-11-19", out_of_service="awaiting recalibration")
     with pytest.raises(GonioError, match="AC-1 was due on 2025-11-19"):
         submit(sqlite_store, tech, inst, sha, [std.id, old.id])
     assert n_calibrations(sqlite_store) == 0

@@ -1,0 +1,110 @@
+"""Equipment past its due date (ISO/IEC 17025 6.4.7, 6.4.13): registering a standard whose
+due date has already passed is refused with one line naming it and the date (exit 2 on the
+command line, nothing registered) unless it is registered out of service with the reason,
+which its record keeps; such a standard is refused by a calibration dated after its due
+date (the submission, the attach), until its recalibration is recorded. The dates are
+relative to the day the test runs, so the rule is checked on either side of today."""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+import os
+import subprocess
+import sys
+
+import pytest
+from sqlalchemy import select
+
+from gonio.errors import GonioError
+from gonio.records import services
+from gonio.records.db import open_store
+from gonio.records.models import AuditEvent, Standard
+
+from .conftest import PASSWORD, make_people
+
+TODAY = dt.datetime.now(dt.timezone.utc).date()     # the service's today (UTC)
+
+
+def gonio(*args, data, rc=0):
+    env = dict(os.environ, GONIO_PASSWORD=PASSWORD)
+    r = subprocess.run([sys.executable, "-m", "gonio", *map(str, args), "--data", str(data)],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == rc, (r.returncode, r.stdout, r.stderr)
+    return r
+
+
+def standards(data) -> dict:
+    st = open_store(None, data)
+    try:
+        with st.session() as s:
+            return {x.identifier: (x.due_on, x.out_of_service, x.retired_on)
+                    for x in s.scalars(select(Standard))}
+    finally:
+        st.close()
+
+
+def test_add_standard_past_due_on_the_command_line(tmp_path):
+    data = tmp_path / "data"
+    gonio("db", "create-user", "alice", "--roles", "technician", data=data)
+    late = TODAY - dt.timedelta(days=1)
+    r = gonio("db", "add-standard", "AC-1", "--name", "autocollimator", "--due-on", late,
+              "--user", "alice", data=data, rc=2)
+    line = r.stderr.strip()
+    assert "\n" not in line and "Traceback" not in line, line
+    assert f"standard AC-1 was due on {late}, before today ({TODAY})" in line, line
+    assert "--out-of-service" in line
+    assert standards(data) == {}                                  # nothing registered
+    # due today is in time; tomorrow too
+    gonio("db", "add-standard", "RT-07", "--name", "rotary table", "--due-on", TODAY,
+          "--user", "alice", data=data)
+    r = gonio("db", "add-standard", "AC-1", "--name", "autocollimator", "--due-on", late,
+              "--out-of-service", "sent for recalibration on 2026-11-20", "--user", "alice",
+              data=data)
+    assert "registered out of service" in r.stdout and "sent for recalibration" in r.stdout
+    assert standards(data) == {"RT-07": (TODAY, "", None),
+                               "AC-1": (late, "sent for recalibration on 2026-11-20", None)}
+    # a blank reason is no reason
+    gonio("db", "add-standard", "AC-2", "--name", "autocollimator", "--due-on", late,
+          "--out-of-service", "   ", "--user", "alice", data=data, rc=2)
+    assert "AC-2" not in standards(data)
+
+
+def test_add_standard_past_due_in_python(sqlite_store):
+    store = sqlite_store
+    people = make_people(store)
+    tech = people["tech"]
+    late = TODAY - dt.timedelta(days=30)
+    with pytest.raises(GonioError, match=f"standard LV-3 was due on {late}, before today"):
+        services.add_standard(store, tech, name="level", identifier="LV-3", due_on=late)
+    st = services.add_standard(store, tech, name="level", identifier="LV-3", due_on=late,
+                               out_of_service="  broken bubble, kept for its history ")
+    assert st.out_of_service == "broken bubble, kept for its history"
+    with store.session() as s:                     # the reason is in the audit trail too
+        ev = s.scalars(select(AuditEvent).where(AuditEvent.entity == "standard",
+                                                AuditEvent.entity_id == str(st.id))).one()
+        assert "broken bubble" in ev.after_json
+    # used by a calibration dated after its due date: refused, naming it and the reason
+    cust = services.add_customer(store, tech, "C")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial="RLG-1",
+                                        spec_key="ogam-draft")
+    good = services.add_standard(store, tech, name="table", identifier="RT-07",
+                                 due_on=TODAY + dt.timedelta(days=300))
+    n = iter(range(1, 10))
+
+    def readings():                 # the same measurement is not calibrated twice
+        return services.store_file(store, io.BytesIO(f"x,y\n{next(n)},2\n".encode()))[0]
+    base = dict(instrument_id=inst.id, performed_on=TODAY, temperature_c=20, humidity_pct=45)
+    with pytest.raises(GonioError, match=f"LV-3 was due on {late}.*out of service: broken"):
+        services.create_calibration(store, tech, standard_ids=[good.id, st.id], **base,
+                                    readings_sha256=readings())
+    # a calibration dated before its due date may use it (it was valid then)
+    cal = services.create_calibration(store, tech, standard_ids=[good.id, st.id],
+                                      **{**base, "performed_on": late - dt.timedelta(days=1)},
+                                      readings_sha256=readings())
+    assert cal.id
+    # its recalibration recorded: in use again
+    services.update_standard(store, tech, st.id, calibrated_on=TODAY,
+                             due_on=TODAY + dt.timedelta(days=365))
+    assert services.create_calibration(store, tech, standard_ids=[st.id], **base,
+                                       readings_sha256=readings()).id
