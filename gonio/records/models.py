@@ -144,8 +144,9 @@ class Standard(Base):
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
     #: retired (no new calibration uses it; its history stays); None: in use
     retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
-    #: registered past its due date: the reason stated (registered out of service, retired
-    #: that day; :func:`gonio.records.services.add_standard`); "" registered in time
+    #: registered already past its due date: the reason stated (registered out of service:
+    #: refused in use until its recalibration is recorded;
+    #: :func:`gonio.records.services.add_standard`); "" registered in time
     out_of_service: Mapped[str] = mapped_column(Text, default="", server_default="")
 
 
