@@ -1775,14 +1775,24 @@ def table_positions_used(t: pd.DataFrame, protocol: Protocol, table_calibration)
 
 
 def _scale_factor_positions(t: pd.DataFrame, protocol: Protocol):
-    """(stop, zeroing position) of the 7.1 rounds for K's table lines at the MPE
-    (:func:`round_positions`); (None, None) — every round zeroed at 0° and stopped at its
-    angle, the draft's 7.1 — where the readings' angles are not the protocol's stop − start
-    (K's table lines then take the draft's positions, as they did before positions were read)."""
+    """(stop, zeroing position, note) of the 7.1 rounds for K's table line at the MPE
+    (:func:`round_positions`). Where the readings' angles are not the protocol's stop − start
+    (or the protocol has no such rounds): (None, None, the note saying so) — every round
+    zeroed at 0° and stopped at its angle, the draft's 7.1. The note goes into the line's
+    source and the budget's notes: the line is then not the one of the rounds' own positions,
+    but where every round turns one way it is not narrower: the worst combination MPE·Σ|c_p|
+    is largest where no stop falls on another round's zero, as with one zero shared by all,
+    2·MPE·Σ 1/(n|θ_i|) over the rounds that do not turn a full circle
+    (:func:`~gonio.specs.ogam_draft.item_uncertainty.scale_factor_table_bound_rel`)."""
     try:
-        return round_positions(t, protocol, "scale_factor")
-    except (GonioError, StopIteration, IndexError, KeyError):
-        return None, None
+        stop, zero = round_positions(t, protocol, "scale_factor")
+        return stop, zero, ""
+    except (GonioError, StopIteration, IndexError, KeyError) as e:
+        why = str(e) if isinstance(e, GonioError) else \
+            "the protocol's 7.1 rounds do not match the readings' rounds"
+        return None, None, (f"K's table line takes the draft's 7.1 positions (every round "
+                            f"zeroed at 0 deg), not the rounds' own ({why}); not narrower than "
+                            f"theirs where every round turns one way")
 
 
 def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):
@@ -1981,10 +1991,11 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     if sf.measured:
         t = sf.table
         t_corr, t_note = _scale_factor_table(t, protocol, table_calibration)
-        stop, zero = _scale_factor_positions(t, protocol)
+        stop, zero, p_note = _scale_factor_positions(t, protocol)
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
                   chamber=chamber_temperature(readings, protocol, gyro_type)[0],
-                  table_correction=t_corr, table_note=t_note, stop_deg=stop, zero_deg=zero)
+                  table_correction=t_corr, table_note="; ".join(x for x in (t_note, p_note) if x),
+                  stop_deg=stop, zero_deg=zero)
         # the draft's reading: the 7.1 mean as measured, the MPE's table line
         draft_k = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
                                          **dict(kw, table_correction=None))
@@ -2446,6 +2457,10 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
             f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
             f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
             f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"))
+    if "scale_factor" in items and res.scale_factor.measured:
+        p_note = _scale_factor_positions(res.scale_factor.table, proto)[2]
+        if p_note:
+            notes.append(p_note)
     if table_calibration is not None and "scale_factor" in items:
         used = any(c.symbol == "P_Kc" for c in items["scale_factor"].components)
         notes.append(f"K corrected by the {table_calibration.describe()} [beyond the draft]"

@@ -5,9 +5,9 @@ measurement uncertainty"; the draft's Annex A budgets only E. This module gives 
 budget to each of the seven items, one documented function each:
 
 ==============================  ======  ===================================================
-:func:`scale_factor_budget`     K       Type A scatter of K_i, table angle error at the stops
-                                        (the larger of :func:`scale_factor_table_line`'s two
-                                        readings), count quantisation (7.1)
+:func:`scale_factor_budget`     K       Type A scatter of K_i, table angle errors at the 7.1
+                                        positions (their worst linear combination within
+                                        the MPE, rectangular), count quantisation (7.1)
 :func:`nonlinearity_corrected_budget`  K_l  the range corrected for its bias by noise and tilt
                                         (JCGM 101 Monte Carlo of the K_i's errors; stated:
                                         the standard's value, u the larger of its table
@@ -63,7 +63,7 @@ __all__ = [
     "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U", "budget_k",
     "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
-    "scale_factor_table_coefficients", "scale_factor_table_u_rel",
+    "scale_factor_table_coefficients", "scale_factor_table_u_rel", "scale_factor_table_bound_rel",
     "scale_factor_table_correction", "table_corrected_k_sensitivity", "ChamberLine",
     "table_round_sensitivity", "calibration_error_draws", "calibration_draw_dof",
     "calibration_draws_text",
@@ -471,6 +471,25 @@ def scale_factor_table_u_rel(theta_deg, table_mpe_arcsec: float, stop_deg=None,
     """
     c = np.array(list(scale_factor_table_coefficients(theta_deg, stop_deg, zero_deg).values()))
     return float(table_mpe_arcsec) / math.sqrt(3.0) * float(np.sqrt(np.sum(c * c)))
+
+
+def scale_factor_table_bound_rel(theta_deg, table_mpe_arcsec: float, stop_deg=None,
+                                 zero_deg=None) -> float:
+    """The largest |δK/K| the table's positioning errors can give when each position the 7.1
+    rounds reach is known only to err within ±MPE (A.4.1) and nothing is known of how the
+    positions' errors go together (one table's errors are one curve, correlated):
+    δK/K = Σ c_p e(p) (:func:`scale_factor_table_coefficients`) is largest with every e(p)
+    at ±MPE by the sign of c_p, MPE·Σ|c_p| (the zero at −MPE, every stop at +MPE, or the
+    reverse). K's table line ``P_K`` is rectangular within it (JCGM 100 4.3.7: a quantity
+    known by its bounds; F.2.4.4: the bounds of a correlated sum taken as one quantity's).
+
+    The draft's stops, MPE 0.1″: 0.1·2·(Σ_{60°…300°} 1/θ_k)/6, 0.1·2·2.2833/(6·216000):
+
+    >>> round(scale_factor_table_bound_rel([60, 120, 180, 240, 300, 360], 0.1) / PPM, 4)
+    0.3524
+    """
+    c = np.array(list(scale_factor_table_coefficients(theta_deg, stop_deg, zero_deg).values()))
+    return float(table_mpe_arcsec) * float(np.sum(np.abs(c)))
 
 
 def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
@@ -890,10 +909,13 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
 
 def _scale_factor_table_lines_of(k_i, th, table_mpe_arcsec: float, table_correction,
                                  table_note: str, stop_deg=None, zero_deg=None) -> list:
-    """K's table lines (:func:`scale_factor_budget`): the calibration's where the table is
-    calibrated, else one line per position the 7.1 rounds reach, its error rectangular ±MPE
-    (A.4.1; JCGM 100 4.3.7), the positions independent and the common zero's error shared
-    by every round (:func:`scale_factor_table_coefficients`): ``P_K<position>``."""
+    """K's table line (:func:`scale_factor_budget`): the calibration's where the table is
+    calibrated, else ``P_K``: the table's errors at the positions the 7.1 rounds reach, each
+    within ±MPE (A.4.1) and correlated as one table's errors are in a way the laboratory does
+    not know, so their worst linear combination (:func:`scale_factor_table_bound_rel`) taken
+    as one rectangular line (JCGM 100 4.3.7, F.2.4.4). The positions-independent reading
+    (:func:`scale_factor_table_u_rel`) and the periodic one (:func:`scale_factor_table_line`)
+    are named in the line's source, not stated."""
     if table_correction is not None:
         tc_ = table_correction
         return [_Line(from_u("P_Kc", 0.0, tc_.u_counts_per_deg, dof=tc_.dof, type="B",
@@ -904,25 +926,22 @@ def _scale_factor_table_lines_of(k_i, th, table_mpe_arcsec: float, table_correct
                       "A.4.1 applied to 7.1, calibrated table")]
     kbar = abs(float(np.mean(k_i)))
     tl = scale_factor_table_line(th, table_mpe_arcsec)
-    beside = (f"beside, not stated: one periodic error at the bound, worst order {tl.order}, "
-              f"arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm (a bound for curves with "
-              f"sum |a_h| <= MPE)")
+    coeffs = scale_factor_table_coefficients(th, stop_deg, zero_deg)
+    bound = scale_factor_table_bound_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
+    u_ind = scale_factor_table_u_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
+    beside = (f"beside, not stated: the positions independent u = {u_ind / PPM:.3g} ppm; one "
+              f"periodic error at the MPE, worst order {tl.order}, half-width "
+              f"{tl.half_width_rel_harmonic / PPM:.3g} ppm")
     if table_note:
         beside += f"; {table_note}"
-    coeffs = scale_factor_table_coefficients(th, stop_deg, zero_deg)
-    u_rel = scale_factor_table_u_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
-    out = []
-    for pos, c in coeffs.items():
-        role = "the rounds' common zero" if c < 0 else "a stop"
-        out.append(_Line(type_b(f"P_K{pos:g}", 0.0, kbar * abs(c) * table_mpe_arcsec,
-                                "rectangular",
-                                source=f"table angle error at {pos:g} deg ({role}), MPE "
-                                       f"±{table_mpe_arcsec:g}″ rectangular, positions "
-                                       f"independent, the zero shared by every round; the "
-                                       f"table's lines together u = {u_rel / PPM:.3g} ppm; "
-                                       + beside),
-                         f"table angle at {pos:g}°", True, "A.4.1 applied to 7.1"))
-    return out
+    pos = ", ".join(f"{p:g}" for p in coeffs)
+    return [_Line(type_b("P_K", 0.0, kbar * bound, "rectangular",
+                         source=f"table angle errors at {pos} deg (the 7.1 rounds' stops and "
+                                f"zero), each within the MPE ±{table_mpe_arcsec:g}″, correlated "
+                                f"as one table's errors (shape not known): their worst linear "
+                                f"combination ±{bound / PPM:.3g} ppm of K, rectangular; "
+                                + beside),
+                  "table angle at the 7.1 positions", True, "A.4.1 applied to 7.1")]
 
 
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
@@ -936,14 +955,18 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
-    table's angle errors at the positions the rounds reach, one line ``P_K<position>`` each
-    (A.4.1 applied to 7.1, :func:`scale_factor_table_coefficients`): round i turns the
-    table from its zero z_i to its stop s_i with the error e(s_i) − e(z_i), each position's
-    error is known only by the MPE, so rectangular ±MPE (JCGM 100 4.3.7) and independent of
-    the other positions', and the common zero's error is one quantity shared by every
-    round (its coefficient −(1/n)Σ 1/θ_i; the 360° stop is the zero, e(360°) = e(0°));
-    ``stop_deg``/``zero_deg``: the rounds' positions (None: zeroed at 0°, stopped at θ_i).
-    The periodic reading (:func:`scale_factor_table_line`) is named in the lines' source. The
+    table's angle errors at the positions the rounds reach, one line ``P_K`` (A.4.1 applied
+    to 7.1, :func:`scale_factor_table_coefficients`): round i turns the table from its zero
+    z_i to its stop s_i with the error e(s_i) − e(z_i), so δK/K = Σ c_p e(p); each position's
+    error is known only by the MPE and the positions' errors are one table's curve, correlated
+    in a way the laboratory does not know, so the line is rectangular within their worst
+    linear combination MPE·Σ|c_p| (:func:`scale_factor_table_bound_rel`; JCGM 100 4.3.7,
+    F.2.4.4): it holds for every table within its MPE, the zero at −MPE and every stop at
+    +MPE included, and is over-wide for a table well inside it (docs/draft-readings.md 7.1,
+    "K's table line"). ``stop_deg``/``zero_deg``: the rounds' positions (None: zeroed at 0°,
+    stopped at θ_i; the 360° stop is the zero, e(360°) = e(0°)). The positions-independent
+    reading (:func:`scale_factor_table_u_rel`) and the periodic one
+    (:func:`scale_factor_table_line`) are named in the line's source. The
     count quantisation, triangular ±1 count: u = (1/n)√Σ(u_C/θ_i)². The Type A scatter also
     holds the table's per-visit scatter (conservative).
 
@@ -977,19 +1000,16 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     --------
     The draft's six rounds 60°…360° with K_i = 3600.1, 3600.3, 3600.2, 3600.2, 3600.1,
     3600.3 counts/°, table MPE 0.1″ (A.4.1): s(K_i) = 0.0894, s/√6 = 0.0365;
-    the table at the zero: 3600.2·(0.1/√3)·(Σ_{60°…300°} 1/θ_k)/6 = 3600.2·0.05774·
-    2.2833/1296000 = 3.66e-4, at 60°: 3600.2·0.05774/1296000 = 1.60e-4, at 120° half that,
-    …; together 3600.2·0.1151 ppm = 4.14e-4 counts/°; quantisation (1/√6)/6·√Σ1/θ_i² =
-    0.0680·0.02034 = 0.00138 counts/°.
+    the table: the zero's coefficient −2.2833/1296000, the stops' 1/1296000, 1/2, …, 1/5 of
+    it, so the worst combination is 0.1·4.5667/1296000 = 0.3524 ppm, u = 3600.2·0.3524e-6/√3
+    = 7.32e-4 counts/°; quantisation (1/√6)/6·√Σ1/θ_i² = 0.0680·0.02034 = 0.00138 counts/°.
 
     >>> b = scale_factor_budget([3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3],
     ...                         [60, 120, 180, 240, 300, 360], 0.1)
-    >>> [(c.symbol, round(c.u, 5)) for c in b.components][:3]
-    [('s_K', 0.03651), ('P_K0', 0.00037), ('P_K60', 0.00016)]
-    >>> len(b.components), round(b.components[-1].u, 5)
-    (8, 0.00138)
-    >>> round(math.sqrt(sum(c.u ** 2 for c in b.components[1:7])), 6)
-    0.000414
+    >>> [(c.symbol, round(c.u, 5)) for c in b.components]
+    [('s_K', 0.03651), ('P_K', 0.00073), ('q_K', 0.00138)]
+    >>> b.components[1].distribution
+    'rectangular'
     >>> round(b.u_c, 4), b.nu_eff > 4, b.k_source
     (0.0365, True, 'welch-satterthwaite')
     """

@@ -83,7 +83,9 @@ __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench"
            "pack_trials", "unpack_trials", "EXTRA_SYMBOLS", "draw_type_b", "worst_azimuth",
            "worst_condition",
            "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND", "TABLE_CALIBRATION_U_ARCSEC",
-           "table_positions_deg", "drawn_table_calibration", "case_table_calibration"]
+           "table_positions_deg", "drawn_table_calibration", "case_table_calibration",
+           "drawn_table_curve", "corner_table", "worst_harmonic_table", "TABLE_CURVE_MAX_ORDER",
+           "TABLE_GRADUATION_ARCSEC"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -99,8 +101,11 @@ CASES = {
                "budget's tilt terms are exercised, not held at one value",
     "typeb": "every Type B effect of the set-up drawn per trial from what the laboratory "
              "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's "
-             "positioning error at every 30 deg position uniform within the MPE less the "
-             "scatter's 3 sigma, independent from position to position (A.4.1), its wobble "
+             "positioning error a random smooth curve (harmonics of orders 1-"
+             "6, amplitudes uniform/order, phases uniform, scaled so "
+             "that its max |e| over the circle is uniform within the MPE less the scatter's 3 "
+             "sigma and the graduation part) plus a small graduation part independent at every "
+             "30 deg position (uniform within TABLE_GRADUATION_ARCSEC), its wobble "
              "phase and axis set-up azimuth uniform, its rate error "
              "uniform within Table 1's 1e-5, the chamber's deviation from the reference "
              "temperature uniform within Table 2's tolerance, the gyro's scale-factor "
@@ -111,10 +116,17 @@ CASES = {
              "(worst_azimuth, from noise-free sessions of the bench); the other Type B "
              "effects (table errors, table rate error, chamber temperature, alpha_K) drawn "
              "per trial as in typeb",
-    "worsttable": "the table at its A.4.1 bound: its periodic positioning errors' sizes at "
-                  "the bound (amplitudes' sum = the MPE less the scatter's 3 sigma; the "
-                  "bench's error shape, phases drawn), every other Type B effect drawn per "
-                  "trial as in typeb",
+    "worsttable": "the table at its A.4.1 bound, the corner for K: the error at the 7.1 "
+                  "rounds' zero at -(MPE less the scatter's 3 sigma) and at every other "
+                  "30 deg position at +(that), or the reverse (sign drawn): every round's "
+                  "angle off by twice the bound the same way; every other Type B effect "
+                  "drawn per trial as in typeb",
+    "worstharmonic": "the table's one periodic error at the A.4.1 bound (amplitude the MPE "
+                     "less the scatter's 3 sigma) of the order and phase that move the 7.1 K "
+                     "most (sign drawn); every other Type B effect drawn per trial as in typeb",
+    "worstshape": "the bench's table shape at its A.4.1 bound (amplitudes' sum = the MPE less "
+                  "the scatter's 3 sigma, phases drawn; worsttable until 2026-12-01), every "
+                  "other Type B effect drawn per trial as in typeb",
     "tablecal": "the draws of typeb with a calibrated table: per trial a table calibration "
                 "(table_calibration.py) drawn from the trial bench's true periodic table "
                 "error at every position the protocol uses plus normal noise of "
@@ -144,7 +156,7 @@ TABLE_CALIBRATION_PART_DOF = 3.0
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
 #: (a Type B line is one fixed offset there; :func:`item_coverage`'s ``judge_spread``).
-FIXED_CONDITION_CASES = ("worst", "worsttable")
+FIXED_CONDITION_CASES = ("worst", "worsttable", "worstharmonic", "worstshape")
 
 #: Table 1's bound on the rate table's relative rate error (the ``typeb`` case draws within it).
 TABLE_RATE_ERROR_BOUND = 1e-5
@@ -232,7 +244,8 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
-    if case in ("mounted", "typeb", "worsttable", "tablecal", "tablecalpart", "tablecaldof"):
+    if case in ("mounted", "typeb", "worsttable", "worstharmonic", "worstshape", "tablecal",
+                "tablecalpart", "tablecaldof"):
         return bench                      # drawn per trial (:func:`trial_bench`)
     if case == "worst":                   # the other Type B effects drawn per trial
         psi = float(protocol.annex_a.tilt_bound_deg)
@@ -296,17 +309,20 @@ def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
     return float(iu.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)   # K as stated
 
 
-def draw_type_b(bench: Bench, protocol: Protocol, seed: int, table_errors: str = "positions"
+def draw_type_b(bench: Bench, protocol: Protocol, seed: int, table_errors: str = "curve"
                 ) -> Bench:
     """``bench`` with its set-up's Type B effects drawn from the trial's seed, each from what
     a laboratory knows of it (a bound, not the value): the tilt uniform over the disc ψ ≤
-    the A.1 bound (ψ = bound·√u, azimuth uniform); the table's positioning error at each
-    position the programme visits (every :data:`TABLE_GRID_DEG`) uniform within what the MPE
-    leaves beside the scatter's 3σ, independent from position to position
-    (:func:`drawn_position_errors`, ``table_errors="positions"``: what a laboratory that
-    knows its table by the MPE knows, the distribution K's and E's table lines take, A.4.1,
-    JCGM 100 4.3.7), or (``table_errors="shape"``) the bench's periodic errors at uniform
-    phases with their sizes drawn as below; the wobble's phase and the axis set-up error's azimuth uniform; the
+    the A.1 bound (ψ = bound·√u, azimuth uniform); the table's positioning error as real
+    tables err (``table_errors="curve"``, :func:`drawn_table_curve`): one smooth random
+    curve of low orders whose max |e| over the circle is drawn within what the MPE leaves
+    beside the scatter's 3σ and a small graduation part, plus that graduation part,
+    independent at every position the programme visits (every :data:`TABLE_GRID_DEG`) — a
+    table the laboratory knows by its MPE alone, drawn from physics, not from a budget's
+    model; or (``table_errors="positions"``, :func:`drawn_position_errors`) every position
+    independent uniform within that room (the per-position model, kept for comparison); or
+    (``table_errors="shape"``) the bench's periodic errors at uniform phases with their sizes
+    drawn as below; the wobble's phase and the axis set-up error's azimuth uniform; the
     table's relative rate error uniform within Table 1's ±1e-5
     (:data:`TABLE_RATE_ERROR_BOUND`); the chamber's deviation from the reference temperature
     uniform within Table 2's tolerance (``conditions.temperature_tolerance_c``, ±1 °C), which
@@ -365,16 +381,139 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int, table_errors: str =
     table = replace(table, positioning_harmonics=_harmonic_sizes(table, float(rng.uniform())))
     sigma_dph = float(rng.uniform()) * float(protocol.annex_a.zero_stability_dph) / math.sqrt(2.0)
     inst = replace(inst, bias_instability_dph=sigma_dph)
-    if table_errors == "positions":      # its own stream: every draw above keeps its value
+    if table_errors == "curve":          # its own stream: every draw above keeps its value
+        table = replace(table, positioning_harmonics=drawn_table_curve(table, seed))
+    elif table_errors == "positions":
         table = replace(table, positioning_harmonics=drawn_position_errors(table, seed))
     elif table_errors != "shape":
-        raise ValueError(f"table_errors must be 'positions' or 'shape', not {table_errors!r}")
+        raise ValueError(f"table_errors must be 'curve', 'positions' or 'shape', not "
+                         f"{table_errors!r}")
     return replace(out, instrument=inst, table=table, chamber_deviation_c=dev_c)
 
 
 #: The step of the table positions the study draws errors at: the built-in programme's
 #: positions (7.1's stops, 7.4's points, the tilt estimate's rests) are all multiples of 30°.
 TABLE_GRID_DEG = 30.0
+
+
+#: The highest order of the smooth part of the table error the ``typeb`` study draws
+#: (:func:`drawn_table_curve`): a worm-gear or encoder table's error is dominated by its
+#: low orders (eccentricity 1, ellipticity 2, the encoder's and mount's few-lobe terms).
+TABLE_CURVE_MAX_ORDER = 6
+#: The bound of the graduation part of the drawn table error, independent at every
+#: :data:`TABLE_GRID_DEG` position, arcsec (a tenth of the draft's MPE, A.4.1).
+TABLE_GRADUATION_ARCSEC = 0.01
+
+
+def _room_arcsec(table) -> float:
+    """What the MPE leaves for the table's systematic error beside its scatter's 3σ
+    (A.4.1: |error| ≤ MPE)."""
+    return max(float(table.mpe_arcsec) - 3.0 * float(table.positioning_random_arcsec), 0.0)
+
+
+def _grid_harmonics(v: np.ndarray) -> dict:
+    """{order: complex amplitude c} of the trigonometric polynomial through the values ``v``
+    at the :data:`TABLE_GRID_DEG` grid, less their mean (a constant error cancels in every
+    angle turned), e(x) = Σ Im(c e^{ihx})."""
+    n = v.size
+    spec = np.fft.rfft(v)
+    # a_k cos(kx + φ) = Im(a_k e^{i(kx + φ + 90°)})
+    return {k: complex(spec[k] * (1.0 if 2 * k == n else 2.0) / n * 1j)
+            for k in range(1, n // 2 + 1)}
+
+
+def _as_harmonics(c: dict) -> tuple:
+    return tuple(Harmonic(k, float(abs(v)), float(math.degrees(np.angle(v)) % 360.0))
+                 for k, v in sorted(c.items()))
+
+
+def drawn_table_curve(table, seed: int) -> tuple:
+    """A table's positioning error drawn as real tables err and as a laboratory knows them
+    (by the MPE alone, A.4.1), the ``typeb`` study's table: a smooth curve
+    Σ_{h=1}^{N} a_h sin(h x + φ_h), N = :data:`TABLE_CURVE_MAX_ORDER`, with a_h uniform in
+    [0, 1/h) (a smooth curve's spectrum falls with the order) and φ_h uniform, scaled so that
+    its max |e| over the circle (0.1° steps) is uniform within the room the MPE leaves beside
+    the scatter's 3σ and the graduation part; plus the graduation part, uniform within
+    ±:data:`TABLE_GRADUATION_ARCSEC` independently at every :data:`TABLE_GRID_DEG` position
+    (as the harmonics of the trigonometric polynomial through those values, less their mean).
+    Between the grid's positions the graduation part is that polynomial (no item of the
+    built-in programme stops there). The truth is the bench's physics, never a budget's
+    model: the curve's errors at the 7.1 positions are correlated as one table's are.
+
+    >>> from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    >>> t = load_bench("rlg").table
+    >>> hs = drawn_table_curve(t, 3)
+    >>> x = np.arange(0.0, 360.0, 30.0)
+    >>> bool(np.ptp(harmonic_sum_arcsec(x, hs)) <= 2 * (0.1 - 3 * 0.01))   # a constant cancels
+    True
+    >>> [h.order for h in hs], drawn_table_curve(t, 3) == hs, drawn_table_curve(t, 4) != hs
+    ([1, 2, 3, 4, 5, 6], True, True)
+    """
+    rng = np.random.default_rng([int(seed), 0xC0A7E])
+    grad = min(TABLE_GRADUATION_ARCSEC, _room_arcsec(table))
+    room = _room_arcsec(table) - grad
+    orders = np.arange(1, TABLE_CURVE_MAX_ORDER + 1)
+    amp = rng.uniform(0.0, 1.0, orders.size) / orders
+    phase = rng.uniform(0.0, 2.0 * math.pi, orders.size)
+    x = np.radians(np.arange(0.0, 360.0, 0.1))
+    e = np.sin(np.outer(x, orders) + phase) @ amp
+    scale = float(rng.uniform()) * room / float(np.max(np.abs(e)))
+    n = int(round(360.0 / TABLE_GRID_DEG))
+    c = _grid_harmonics(rng.uniform(-grad, grad, n))
+    for h, a, ph in zip(orders, amp, phase):
+        c[int(h)] = c.get(int(h), 0j) + scale * a * complex(math.cos(ph), math.sin(ph))
+    return _as_harmonics(c)
+
+
+def _k_coefficients(protocol: Protocol) -> dict:
+    """K's coefficients at the 7.1 rounds' positions of ``protocol``
+    (:func:`~gonio.specs.ogam_draft.item_uncertainty.scale_factor_table_coefficients`)."""
+    from gonio.specs.ogam_draft.item_uncertainty import scale_factor_table_coefficients
+
+    item = next(it for it in protocol.items() if it.test == "scale_factor")
+    stop = np.array([r.stop_deg for r in item.rounds], dtype=float)
+    zero = np.array([(r.start_deg if item.rezero else item.rounds[0].start_deg)
+                     for r in item.rounds], dtype=float)
+    return scale_factor_table_coefficients(stop - zero, stop, zero)
+
+
+def corner_table(table, protocol: Protocol, sign: float) -> tuple:
+    """The ``worsttable`` study's table: the error at the 7.1 rounds' zero at −sign·room and at
+    every other :data:`TABLE_GRID_DEG` position at +sign·room (room: the MPE less the
+    scatter's 3σ, A.4.1), as the harmonics through those values: every round's angle off by
+    2·room the same way, K moved by room·Σ|c_p| (the 7.1 zero is the only position with a
+    negative coefficient where the rounds share it, :func:`_k_coefficients`).
+
+    >>> from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    >>> p = validation_protocol(); t = load_bench("rlg").table
+    >>> e = harmonic_sum_arcsec(np.array([0.0, 60.0, 330.0]), corner_table(t, p, 1.0))
+    >>> bool(np.allclose(e - e[0], [0.0, 0.14, 0.14]))
+    True
+    """
+    room = _room_arcsec(table)
+    zeros = {p for p, c in _k_coefficients(protocol).items() if c < 0}
+    x = np.arange(0.0, 360.0, TABLE_GRID_DEG)
+    v = np.where([round(float(p), 6) in zeros for p in x], -sign * room, sign * room)
+    return _as_harmonics(_grid_harmonics(v))
+
+
+def worst_harmonic_table(table, protocol: Protocol, sign: float, max_order: int = 12) -> tuple:
+    """The ``worstharmonic`` study's table: one periodic error room·sin(h x + φ) (room: the MPE
+    less the scatter's 3σ, A.4.1) of the order h ≤ ``max_order`` and phase φ that move the 7.1
+    K most, δK/K = room·Im(e^{iφ} Σ_p c_p e^{ihp}), in the direction ``sign``.
+
+    >>> p = validation_protocol(); t = load_bench("rlg").table
+    >>> h = worst_harmonic_table(t, p, 1.0)[0]
+    >>> h.order, round(h.amplitude_arcsec, 3)
+    (3, 0.07)
+    """
+    c = _k_coefficients(protocol)
+    pos = np.radians(np.array(list(c), dtype=float))
+    cp = np.array(list(c.values()))
+    g = [complex(np.sum(cp * np.exp(1j * h * pos))) for h in range(1, max_order + 1)]
+    h = int(np.argmax(np.abs(g))) + 1
+    phi = math.pi / 2.0 - float(np.angle(g[h - 1])) + (0.0 if sign > 0 else math.pi)
+    return (Harmonic(h, _room_arcsec(table), math.degrees(phi) % 360.0),)
 
 
 def drawn_position_errors(table, seed: int) -> tuple:
@@ -475,22 +614,32 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     >>> t.chamber_deviation_c == draw_type_b(w, p, 3).chamber_deviation_c != 0.0
     True
 
-    ``worsttable``: the draws of ``typeb`` with the table's harmonics at the A.4.1 bound
+    ``worsttable``, ``worstharmonic``: the draws of ``typeb`` with the table at the corner
+    (:func:`corner_table`) or its worst periodic error (:func:`worst_harmonic_table`), the
+    sign drawn; ``worstshape``: the bench's table shape with its harmonics at the A.4.1 bound
     (their sum plus the scatter's 3σ = the MPE):
 
-    >>> t = trial_bench("worsttable", b, p, 3)
+    >>> t = trial_bench("worstshape", b, p, 3)
     >>> h = t.table.positioning_harmonics
     >>> round(sum(abs(x.amplitude_arcsec) for x in h) + 3 * t.table.positioning_random_arcsec, 12)
     0.1
     >>> t.chamber_deviation_c == draw_type_b(b, p, 3).chamber_deviation_c
     True
+    >>> trial_bench("worstharmonic", b, p, 3).table.positioning_harmonics[0].order
+    3
     """
     if case in ("typeb", "tablecal", "tablecalpart", "tablecaldof"):
         return draw_type_b(bench, protocol, seed)
-    if case == "worsttable":
+    if case == "worstshape":
         d = draw_type_b(bench, protocol, seed, table_errors="shape")
         return replace(d, table=replace(d.table,
                                         positioning_harmonics=_harmonic_sizes(d.table, 1.0)))
+    if case in ("worsttable", "worstharmonic"):
+        d = draw_type_b(bench, protocol, seed)
+        sign = 1.0 if np.random.default_rng([int(seed), 0x5161]).uniform() < 0.5 else -1.0
+        f = corner_table if case == "worsttable" else worst_harmonic_table
+        return replace(d, table=replace(d.table,
+                                        positioning_harmonics=f(d.table, protocol, sign)))
     if case == "worst":
         i = bench.instrument
         return tilted(draw_type_b(bench, protocol, seed), i.tilt_deg, i.tilt_azimuth_deg)
