@@ -129,12 +129,13 @@ def test_coverage_at_worst_condition(proto, base):
     table's errors and the chamber drawn per trial as ``gonio validate --cases worst``
     does): the corrected K covers (Clopper–Pearson reaching 95 %), |mean z| < 0.5; the
     uncorrected K with U at the bound is biased (mean z > 0.8) and over-wide (sd z < 0.5:
-    the arcsine's variance at the bound, a bias at the worst azimuth). The corrected sd z (0.6–0.8 on these seeds) is
+    the arcsine's variance at the bound, a bias at the worst azimuth). The corrected sd z is
     below 1 by the Type B bounds (the chamber line takes |α_K| ≤ 0.1 ppm/°C, the bench's
-    gyro has 0.05; the table's errors lie within the MPE) and, since K's table line is the
-    table's one periodic error at the MPE bound at the worst order (the bench's table is well
-    inside it), 0.35 on these seeds: over-wide, documented (docs/draft-readings.md, "K's
-    table line at the 7.1 stops"); it is held within 0.3–1.3."""
+    gyro has 0.05) and above all by K's table line: the worst linear combination of the 7.1
+    positions' errors within the MPE (0.352 ppm half-width, rectangular), which holds the
+    corner the MPE allows, against the study's smooth table curves (0.04 ppm rms in K): z sd
+    0.32 on these seeds (0.35 with the positions-independent line), over-wide, documented
+    (docs/draft-readings.md 7.1, "K's table line"); it is held within 0.25–1.3."""
     worst = case_bench("worst", base, proto)
     z, zb, hit = [], [], 0
     for s in range(700, 700 + TRIALS):
@@ -148,6 +149,6 @@ def test_coverage_at_worst_condition(proto, base):
     print(f"K corrected: {hit}/{TRIALS}, z mean {z.mean():+.2f} sd {z.std(ddof=1):.2f}; "
           f"bound: z mean {zb.mean():+.2f} sd {zb.std(ddof=1):.2f}")
     assert clopper_pearson(hit, TRIALS)[1] >= 0.95
-    assert 0.3 <= np.std(z, ddof=1) <= 1.3
+    assert 0.25 <= np.std(z, ddof=1) <= 1.3
     assert abs(np.mean(z)) < 0.5
     assert np.mean(zb) > 0.8 and np.std(zb, ddof=1) < 0.5

@@ -78,7 +78,7 @@ def test_noise_free_exact_calibration(proto, base):
     assert abs(b.value / k_true - 1.0) < 0.005e-6
     syms = [c.symbol for c in b.components]
     assert "P_Kc" in syms and not any(s.startswith("P_K") and s != "P_Kc" for s in syms)
-    assert "P_K0" in [c.symbol for c in b_raw.components]      # the MPE's lines, per position
+    assert "P_K" in [c.symbol for c in b_raw.components]      # the MPE line
     src = next(c for c in b.components if c.symbol == "P_Kc").source
     assert "table calibration, exact, u 0.02″" in src
     # the correction is the table's, not a fit: a calibration with the errors' sign flipped
@@ -183,7 +183,7 @@ def test_good_file_and_uncovered_positions(tmp_path, proto, base):
     assert c.lookup([360.0, 60.0])[0].tolist() == [0, 1]
     _, rep = _analyse(proto, replace(base.random_off(), table=TableConfig()), 0, str(f))
     b = rep.item_uncertainty["scale_factor"]
-    line = next(x for x in b.components if x.symbol == "P_K0")
+    line = next(x for x in b.components if x.symbol == "P_K")
     assert "t.csv does not cover 120, 180, 240, 300 deg: the MPE line kept" in line.source
     assert any("t.csv does not cover" in n for n in rep.budget_notes)
 

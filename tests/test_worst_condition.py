@@ -94,7 +94,8 @@ def test_scale_factor_covers_at_the_worst_condition(at_worst):
     spread is judged where they are drawn, tests/test_k_tilt_correction.py). The draft's 7.1 mean beside it, U with the coupling at the
     bound (arcsine, worst azimuth), covers too but is biased by the coupling (z mean > 0.8,
     sd < 0.7: a deterministic bias that a bound line widens for and cannot centre); without
-    that line it does not cover. (The disc model's narrower line covered 85 % here while K's
+    that line it is biased, z mean > 0.8 (it covered < 95 % while K's table line took the
+    positions independent; the worst-combination line hides the bias in U). (The disc model's narrower line covered 85 % here while K's
     table line took the stops as independent; with the table's one periodic error at the
     bound, P_K fills what the disc model leaves, so it is not asserted.)"""
     d, U, u_c, d_draft, U_draft, u_draft, U_no, U_disc = at_worst["K"].T
@@ -105,7 +106,10 @@ def test_scale_factor_covers_at_the_worst_condition(at_worst):
     assert _cp(d_draft, U_draft)[1][1] >= 0.95
     z_draft = d_draft / u_draft
     assert np.mean(z_draft) > 0.8 and np.std(z_draft, ddof=1) < 0.7
-    assert _cp(d_draft, U_no)[1][1] < 0.95
+    # without that line the draft's K is biased by the coupling (its coverage is no test
+    # now: K's table line, the worst combination within the MPE, is wide enough to hide it)
+    u_no = U_no * u_draft / U_draft
+    assert np.mean(d_draft / u_no) > 0.8, np.mean(d_draft / u_no)
     assert np.all(U_disc < U_draft)
     assert np.mean(d_draft) > 0.5 * np.mean(U_draft - U_no)   # the bias is really there
 
@@ -224,18 +228,19 @@ def test_type_b_draws_follow_their_stated_distributions(proto):
                  [x.table.axis_setup_azimuth_deg for x in d]):
         a = np.radians(vals)
         assert abs(np.mean(np.cos(a))) < 0.05 and abs(np.mean(np.sin(a))) < 0.05
-    # the table's error at every 30° position drawn uniform within what the MPE leaves
-    # beside the scatter's 3σ (A.4.1), independent from position to position (the drawn
-    # values less their mean: a constant cancels in every angle turned)
+    # the table's error a smooth random curve (study.drawn_table_curve): within what the MPE
+    # leaves beside the scatter's 3σ (A.4.1; a constant cancels in every angle turned, so
+    # the range is checked), its size drawn (not at the bound), and neighbouring 30°
+    # positions correlated as one curve's (positions drawn independently give −1/11)
     room = b.table.mpe_arcsec - 3 * b.table.positioning_random_arcsec
     x = np.arange(0.0, 360.0, 30.0)
     e = np.array([harmonic_sum_arcsec(x, t.table.positioning_harmonics) for t in d[:1000]])
-    assert np.ptp(e, axis=1).max() <= 2 * room
-    n = x.size                       # var of a uniform less the mean of n: (1 − 1/n)·room²/3
-    assert np.var(e) == pytest.approx((1 - 1 / n) * room ** 2 / 3, rel=0.05)
-    r = np.corrcoef(e[:, 1], e[:, 2])[0, 1]               # neighbours: −1/(n − 1) after the mean
-    assert abs(r + 1 / (n - 1)) < 0.08
-    # the bench's shape at its sizes (worsttable's draws): within the MPE, every size its own
+    half = np.ptp(e, axis=1) / 2
+    assert half.max() <= room
+    assert np.quantile(half, 0.05) < 0.2 * room and np.quantile(half, 0.5) < 0.6 * room
+    r = np.corrcoef(e[:, 1], e[:, 2])[0, 1]
+    assert r > 0.3, r
+    # the bench's shape at its sizes (worstshape's draws): within the MPE, every size its own
     s = [draw_type_b(b, proto, k, table_errors="shape") for k in range(50)]
     assert all(t.table.error_bound_arcsec() <= b.table.mpe_arcsec + 1e-12 for t in s)
     assert len({round(t.table.error_bound_arcsec(), 9) for t in s}) == 50
