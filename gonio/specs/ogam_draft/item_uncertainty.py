@@ -964,11 +964,10 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     F.2.4.4): it holds for every table within its MPE, the zero at −MPE and every stop at
     +MPE included, and is over-wide for a table well inside it (docs/draft-readings.md 7.1,
     "K's table line"). ``stop_deg``/``zero_deg``: the rounds' positions (None: zeroed at 0°,
-    stopped at θ_i; the 360° stop is the zero, e(360°) = e(0°)). The positions-independent
-    reading (:func:`scale_factor_table_u_rel`) and the periodic one
-    (:func:`scale_factor_table_line`) are named in the line's source. The
-    count quantisation, triangular ±1 count: u = (1/n)√Σ(u_C/θ_i)². The Type A scatter also
-    holds the table's per-visit scatter (conservative).
+    stopped at θ_i; the 360° stop is the zero). The positions-independent reading
+    (:func:`scale_factor_table_u_rel`) and the periodic one (:func:`scale_factor_table_line`)
+    are named in the line's source. The count quantisation, triangular ±1 count:
+    u = (1/n)√Σ(u_C/θ_i)². The Type A scatter also holds the table's per-visit scatter.
 
     ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`,
     at the tilt bound of A.1): the sensing plane tilted by ψ against the table couples the
