@@ -125,7 +125,11 @@ def cell_numbers(text: str) -> dict:
     ν_eff = 14, p = 95 %)", "0.112 ″; interval [0.066, 0.204] ″ (p = 95 %)", "upper bound: ≤
     0.53 °/h (interval [0, 0.53], p = 95 %); …"): field → its text, or the list of its texts
     where the line holds it more than once (a second statement); ``value`` is the first word
-    unless the line opens with an upper bound."""
+    unless the line opens with an upper bound. A Chinese line (the certificate's zh form:
+    "0.0006；上限：≤ 0.0028（区间 [0, 0.0028]，p = 95 %）") is read with its full-width
+    punctuation as the English line's."""
+    for zh, en in (("；", "; "), ("：", ": "), ("（", " ("), ("）", ")"), ("，", ", ")):
+        text = text.replace(zh, en)
     out: dict = {}
     first = text.split(" ", 1)[0]
     if not text.startswith(("upper bound", "上限")):

@@ -92,8 +92,46 @@ def active_work(store, size: int = 20):
         return _page(s, stmt, 1, size)
 
 
-def calibration_page(store, cal_id: int) -> dict | None:
-    """Everything the calibration page shows; ``stated``: each item's statement
+#: The languages of the web's calibration and certificate pages (the certificate's own).
+PAGE_LANGS = ("en", "zh")
+
+
+def page_lang(value) -> str:
+    """The page language asked for (``?lang=``): "zh", else "en".
+
+    >>> page_lang("zh"), page_lang("ZH "), page_lang(None), page_lang("fr")
+    ('zh', 'zh', 'en', 'en')
+    """
+    v = str(value or "").strip().lower()
+    return v if v in PAGE_LANGS else "en"
+
+
+def result_texts(doc, lang: str, stated: dict | None = None) -> dict:
+    """The stored result's items as a page in ``lang`` states them, with the certificate's own
+    texts (no table of the web's own): ``L`` the report's labels
+    (:func:`gonio.report.i18n.labels`), ``titles`` each item's name as the certificate in
+    ``lang`` names it (the specification's ``item_titles``, else the stored title),
+    ``shown`` each statement's one line (:meth:`gonio.result.statement.Statement.text` in
+    ``lang``, each negative number with U+2212)."""
+    from gonio.report.i18n import labels, minus_sign
+    from gonio.specs import get
+
+    stated = statements_of(doc) if stated is None else stated
+    titles = {}
+    if isinstance(doc, dict) and isinstance(doc.get("items"), dict):
+        try:
+            hook = get(str(doc.get("spec"))).output_hook("item_titles")
+        except Exception:            # an unknown specification: its stored titles
+            hook = None
+        titles = hook(doc, lang) if hook else {
+            k: it.get("title", k) for k, it in doc["items"].items()}
+    return {"lang": lang, "L": labels(lang), "titles": titles,
+            "shown": {k: minus_sign(st.text(lang)) for k, st in stated.items()}}
+
+
+def calibration_page(store, cal_id: int, lang: str = "en") -> dict | None:
+    """Everything the calibration page shows (``lang``: its results in the certificate's
+    language, :func:`result_texts`: ``L``, ``titles``, ``shown``); ``stated``: each item's statement
     (:func:`gonio.records.results.stated_items`, from the sealed result only, which is read
     once for the page), ``shown``: its one line as the page prints it (each negative number
     with U+2212, as the certificate), ``conformity``: the stored decisions as the certificate
@@ -108,7 +146,6 @@ def calibration_page(store, cal_id: int) -> dict | None:
     from gonio.errors import GonioError
     from gonio.records.services import (INPUT_PREFIX, OPTION_PREFIX, TABLE_CALIBRATION,
                                         calibration, seal, settings, table_calibration_name)
-    from gonio.report.i18n import minus_sign
 
     try:
         cal = calibration(store, cal_id)
@@ -150,7 +187,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "place": cal.place or settings(store)["lab_place"], "missing": missing,
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
-            "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
+            "stated": stated, **result_texts(doc, lang, stated),
             "conformity": conformity_of(doc if sealed else None),
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
             "table_calibration": table_calibration_used(table_sha, doc, table_name),

@@ -32,6 +32,27 @@ def summary(result, lab: dict | None = None) -> str:
     return result.summary(lab)
 
 
+def item_titles(res: dict, lang: str = "en") -> dict[str, str]:
+    """Each item's name as the certificate in ``lang`` names it (``res``: results.json): the
+    English title, or in Chinese the specification's ``TITLES_ZH``, else its title through
+    the specification's ``PHRASES_ZH`` and the shared tables (as the certificate's results
+    table and the DCC's translation: :func:`gonio.report.rate_certificate.dcc_translator`);
+    a title no table knows stays as written."""
+    from gonio.report.i18n import labels, reason_text
+    from gonio.report.rate_content import spec_content
+    from gonio.specs import get
+
+    items = res.get("items") or {}
+    if lang != "zh":
+        return {k: it.get("title") or k for k, it in items.items()}
+    data = spec_content(res["spec"]) if get(res["spec"]).certificate_content else None
+    titles = dict(getattr(data, "TITLES_ZH", None) or {})
+    phrases = tuple(getattr(data, "PHRASES_ZH", None) or ())
+    L = labels("zh")
+    return {k: titles.get(k) or reason_text(it.get("title") or k, L, phrases)
+            for k, it in items.items()}
+
+
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
           dcc: bool = False) -> dict[str, Path]:
     """results.json, summary.txt, tables (:func:`gonio.result.tables.write_results`) and

@@ -75,10 +75,11 @@ _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
-#: ``warnings(result)``). An outputs module may also list, as ``CONTENT_REQUIRED``, the
+#: ``warnings(result)``, ``item_titles(res, lang)``: {item key: its name as the certificate
+#: in ``lang`` names it}, for the web's pages in the certificate's languages). An outputs module may also list, as ``CONTENT_REQUIRED``, the
 #: :data:`CONTENT_FIELDS` the certificate content must define for it.
 OUTPUTS_REQUIRED = ("write", "results_json", "summary")
-OUTPUTS_OPTIONAL = ("demo", "warnings")
+OUTPUTS_OPTIONAL = ("demo", "warnings", "item_titles")
 #: The ``gonio`` commands a specification may add options to (``Specification.arguments``),
 #: each with the field naming the keywords its hook takes beyond the common ones
 #: (:meth:`Specification.accepted_options`). A nested command is named by its words, as typed
@@ -486,7 +487,7 @@ class Specification:
 
     def output_hook(self, name: str):
         """The outputs module's optional function ``name`` (:data:`OUTPUTS_OPTIONAL`:
-        ``demo``, ``warnings``), or None where it defines none."""
+        ``demo``, ``warnings``, ``item_titles``), or None where it defines none."""
         if name not in OUTPUTS_OPTIONAL:
             raise KeyError(f"{name!r} is no optional outputs function (OUTPUTS_OPTIONAL)")
         return getattr(self.renderer(), name, None)

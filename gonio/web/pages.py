@@ -586,7 +586,8 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
 @router.get("/calibrations/{cal_id}")
 def calibration_page(request: Request, session: Session, cal_id: int):
     user, csrf = session
-    d = queries.calibration_page(_store(request), cal_id)
+    d = queries.calibration_page(_store(request), cal_id,
+                                 queries.page_lang(request.query_params.get("lang")))
     if d is None:
         return Response("no such calibration", status_code=404)
     return render(request, "calibration.html", user, csrf, **d,
@@ -679,7 +680,15 @@ def certificate_page(request: Request, session: Session, cert_id: int):
     cert, newer = queries.certificate(_store(request), cert_id)
     if cert is None:
         return Response("no such certificate", status_code=404)
-    return render(request, "certificate.html", user, csrf, cert=cert, newer=newer,
+    lang = queries.page_lang(request.query_params.get("lang"))
+    try:                                         # the issued result's items, as stated
+        doc = queries.stored_result(_store(request), cert.results_sha256)
+    except (GonioError, ValueError, OSError):
+        doc = None
+    texts = queries.result_texts(doc, lang)
+    return render(request, "certificate.html", user, csrf, cert=cert, newer=newer, **texts,
+                  items=[(k, it) for k, it in ((doc or {}).get("items") or {}).items()
+                         if isinstance(it, dict)],
                   virtual=queries.virtual_mark(_store(request), cert.results_sha256),
                   error=request.query_params.get("error", "")[:300])
 

@@ -125,6 +125,46 @@ def test_web_states_every_item_as_the_certificate(recorded):
                 recorded["res"]["items"][key]["measured"], (key, cells)
 
 
+_TITLE_ROW = re.compile(r'<tr><td>([^<]*)</td><td>[^<]*</td><td class="num" '
+                        r'data-src="items\.([A-Za-z0-9_]+)">')
+
+
+def test_the_chinese_page_states_the_same_numbers(recorded, tmp_path):
+    """The calibration page in Chinese (``?lang=zh``): every item's numbers are the English
+    page's and the statement rule's from results.json, and the Chinese certificate's, rendered
+    from the same stored result (its number spans); its names are the Chinese certificate's
+    (the report's texts, no table of the web's own)."""
+    from gonio.report.i18n import minus_sign
+    from gonio.result.model import Result
+    from gonio.result.statement import item_statement
+    from gonio.specs import get
+
+    web, cid, res = recorded["web"], recorded["id"], recorded["res"]
+    en = page_rows(web.get(f"/calibrations/{cid}").text)
+    r = web.get(f"/calibrations/{cid}?lang=zh")
+    assert r.status_code == 200
+    zh = page_rows(r.text)
+    assert set(zh) == set(en) and zh
+    assert f"<th>{labels('zh')['item']}</th>" in r.text and 'href="?lang=en"' in r.text
+    out = tmp_path / "zh"                 # the Chinese certificate of the same stored result
+    get(res["spec"]).renderer().write(Result.from_json(res), out, lang="zh")
+    page = (out / "certificate.html").read_text(encoding="utf-8")
+    spans = certificate_spans(page)
+    for key, it in measured(res).items():
+        assert [cell_numbers(c) for c in zh[key]] == [cell_numbers(c) for c in en[key]] \
+            == [expected_cell(it)], (key, zh[key], en[key])
+        st = item_statement(it)
+        if (key, "uncertainty.U") in spans and st.U_text is not None:
+            assert spans[(key, "uncertainty.U")] == {st.U_text}, key
+        if (key, "value") in spans and not st.below_zero and \
+                (it.get("uncertainty") or {}).get("k_source") is None:
+            assert spans[(key, "value")] == {minus_sign(st.value_text)}, key
+    titles = {k: html_module.unescape(t) for t, k in _TITLE_ROW.findall(r.text)}
+    assert titles and all(re.search(r"[\u4e00-\u9fff]", t) for t in titles.values()), titles
+    for key, title in titles.items():           # each name is the zh certificate's own
+        assert html_module.escape(title, quote=False) in page or title in page, (key, title)
+
+
 def test_results_json_served_is_the_stored_result(recorded):
     r = recorded["web"].get(f"/calibrations/{recorded['id']}/files/results.json")
     assert r.status_code == 200

@@ -52,6 +52,15 @@ def write(result: Result, out, *, truth: dict | None = None, lab=None,
     return paths
 
 
+def item_titles(res: dict, lang: str = "en") -> dict[str, str]:
+    """Each item's name as the certificate in ``lang`` names it (``res``: results.json):
+    the draft's own labels (its results table's names), else the item's title."""
+    from gonio.specs.ogam_draft.phrases import LABELS
+
+    return {k: (LABELS.get(k) or {}).get(lang) or it.get("title") or k
+            for k, it in (res.get("items") or {}).items()}
+
+
 def summary(result: Result | dict, lab: dict | None = None) -> str:
     """The seven items, U (k, coverage probability) and any conformity statements as a
     fixed-width text table, rounded as the certificate (:func:`gonio.specs.ogam_draft.stated.summary_text`),

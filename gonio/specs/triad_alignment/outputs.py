@@ -15,7 +15,7 @@ from pathlib import Path
 from gonio.atomic import output_set
 from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
 from gonio.result.tables import write_results
-from gonio.report.item_outputs import results_json, summary  # noqa: F401  (per-item result)
+from gonio.report.item_outputs import item_titles, results_json, summary  # noqa: F401
 
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
