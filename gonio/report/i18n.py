@@ -88,10 +88,11 @@ LABELS: dict[str, dict[str, str]] = {
                       "zh": "……另有 {n} 条，见 results.json"},
     "screening_note": {"en": "Screening of the readings: {n} reading(s) set aside (not used; "
                              "listed in results.json with line and reason) and {m} finding(s) "
-                             "on the completeness of the programme; the results above rest "
-                             "on the remaining data.",
+                             "flagged (the programme's completeness, the mounting, the "
+                             "files' identity: listed below); the results above rest on the "
+                             "remaining data.",
                        "zh": "读数筛查：{n} 个读数被剔除（未使用，行号与原因见 results.json），"
-                             "{m} 项关于校准程序完整性的提示；以上结果基于其余数据。"},
+                             "{m} 项标记的提示（校准程序完整性、安装、文件标识：见下）；以上结果基于其余数据。"},
     "component": {"en": "Component", "zh": "分量"},
     "source": {"en": "Source", "zh": "来源"},
     "type": {"en": "Type", "zh": "类别"},

@@ -1267,6 +1267,55 @@ def tilt_correction(results, readings, protocol):
                       " K carries the coupling at the A.1 bound (K_tilt)")
 
 
+def tilt_beyond_bound(results, readings, protocol, settings: dict) -> tuple[dict, list]:
+    """(settings, findings): the rule where the in-situ tilt estimate contradicts the stated
+    tilt bound (Annex A.1 bounds the sensing plane's tilt; the readings' or protocol's
+    ``tilt_bound_deg``; beyond the draft).
+
+    Where the estimate's 95 % interval lies wholly beyond the bound (ψ − U95(ψ) > bound),
+    the mounting did not meet the condition the bound states, and the certificate says so
+    (a ``tilt-beyond-bound`` finding, flagged). What is done:
+
+    * the correction at the measured ψ stays applied (K and E corrected, U with the
+      correction's uncertainty, lines K_te and tilt_Em): the measurement is the better
+      knowledge of the tilt;
+    * every line the budget takes at the bound (the coupling of C_v, C_g, K_l, and of E
+      and K where the correction cannot be made) is taken at ψ + U95(ψ), the measured
+      tilt's upper 95 % limit, in place of the stated bound (``settings`` returned with
+      ``tilt_bound_deg`` widened); the measurand's text keeps the stated bound.
+
+    An interval that reaches the bound (ψ − U95 ≤ bound) agrees with it: nothing changes.
+    No estimate (no ``[tilt_estimate]``, no rows, K not measured): nothing changes.
+
+    >>> from types import SimpleNamespace as N
+    >>> tc = N(tilt_deg=0.17, u_tilt_deg=0.1, k95=2.0)
+    >>> beyond_bound(tc, 0.1), beyond_bound(N(tilt_deg=0.17, u_tilt_deg=0.02, k95=2.0), 0.1)
+    (False, True)
+    """
+    tc, _ = tilt_correction(results, readings, protocol)
+    bound = float(settings["tilt_bound_deg"])
+    if tc is None or not beyond_bound(tc, bound):
+        return settings, []
+    psi, big_u = float(tc.tilt_deg), float(tc.k95) * float(tc.u_tilt_deg)
+    rows = readings.data[readings.data["test"] == "tilt_estimate"]
+    line = int(rows["line"].min()) if len(rows) else None
+    msg = (f"the in-situ tilt estimate measured psi = {psi:.3g}° (U95 {big_u:.2g}°, interval "
+           f"[{psi - big_u:.3g}, {psi + big_u:.3g}]°), beyond the stated tilt bound "
+           f"{bound:g}° (tilt_bound_deg, Annex A.1): the mounting does not meet the bound; K "
+           "and E stay corrected at the measured tilt, and every line taken at the bound is "
+           f"taken at psi + U95 = {psi + big_u:.3g}°")
+    return ({**settings, "tilt_bound_deg": psi + big_u},
+            [Finding("tilt-beyond-bound", msg, "flagged", file=None if readings.path is None
+                     else str(readings.path), line=line, test="tilt_estimate", clause="A.1",
+                     rule="psi - U95(psi) > tilt_bound_deg: flagged, bound lines at psi + U95")])
+
+
+def beyond_bound(tc, bound_deg: float) -> bool:
+    """Whether a measured tilt's 95 % interval lies wholly beyond ``bound_deg``:
+    ψ − k95 · u(ψ) > bound (:func:`tilt_beyond_bound`)."""
+    return float(tc.tilt_deg) - float(tc.k95) * float(tc.u_tilt_deg) > float(bound_deg)
+
+
 def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
     """A_l of :func:`gonio.specs.ogam_draft.budget_extra.nonlinearity_tilt_bias` for the largest and smallest
     of this calibration's 7.1 rounds, at the budget's tilt bound and the file's latitude
@@ -2429,6 +2478,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                   **programme_conditions(proto))
     _note_exclusions(res, excluded)
     check_counts_agree(kept, res)
+    if tilt is None:            # a tilt file given (--tilt) states the bound itself
+        settings, beyond = tilt_beyond_bound(res, kept, proto, settings)
+        findings = list(findings) + beyond
     e_tilt = None       # E corrected at the measured tilt: the physical reading only
     if budget == "physical" and tilt is None:
         res, e_tilt = angle_deviation_at_measured_tilt(res, kept, proto)

@@ -175,6 +175,27 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      r"first to the last reading",
      "零位稳定性（7.3）第 {1} 组第 {2} 个读数：在 {3} s 读取，按计划应在 {4} s（第 1 个读数在 "
      "{5} s，间隔 {6} s）；按实际读数时刻使用，T = {7} s（首末读数之间）"),
+    (r"tilt_estimate \(in-situ tilt estimate, supports A\.1\) at axis (\w+) position (\d+) "
+     r"\((\S+)°\): the angle accumulated over its rest (\S+)″ departs from the fit the other "
+     r"positions draw by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\); "
+     r"set aside, ψ estimated from the other positions \(K_ref = (\S+) counts/° from the "
+     r"rotation readings\)",
+     "倾斜原位估计（支持附录A.1），{1}轴，第 {2} 位置（{3}°）：静止期间累积角 {4}″ 偏离其余位置的"
+     "拟合达 {5}″（> {6}″；其余读数 s = {7}″，允许漂移 {8}″）；予以剔除，ψ 由其余位置估计"
+     "（K_ref = {9} 脉冲数/(°)，由转动读数求得）"),
+    (r"tilt_estimate \(in-situ tilt estimate, supports A\.1\) at axis (\w+) position (\d+) "
+     r"\((\S+)°\): the angle accumulated over its rest (\S+)″ departs from the fit the other "
+     r"positions draw by (\S+)″ \(> (\S+)″; s = (\S+)″ of the others, drift allowed (\S+)″\); "
+     r"set aside, ψ estimated from the other positions",
+     "倾斜原位估计（支持附录A.1），{1}轴，第 {2} 位置（{3}°）：静止期间累积角 {4}″ 偏离其余位置的"
+     "拟合达 {5}″（> {6}″；其余读数 s = {7}″，允许漂移 {8}″）；予以剔除，ψ 由其余位置估计"),
+    (r"the in-situ tilt estimate measured psi = (\S+)° \(U95 (\S+)°, interval \[(\S+), "
+     r"(\S+)\]°\), beyond the stated tilt bound (\S+)° \(tilt_bound_deg, Annex A\.1\): the "
+     r"mounting does not meet the bound; K and E stay corrected at the measured tilt, and every "
+     r"line taken at the bound is taken at psi \+ U95 = (\S+)°",
+     "倾斜原位估计测得 ψ = {1}°（U95 {2}°，区间 [{3}, {4}]°），超出所声明的倾斜限值 {5}°"
+     "（tilt_bound_deg，附录A.1）：安装不满足该限值；K 和 E 仍按实测倾斜修正，原按限值计算的"
+     "各不确定度分量改按 ψ + U95 = {6}° 计算"),
     (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
     (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading; the "

@@ -46,6 +46,11 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
 
 The z values were measured on clean sessions of the built-in programme, the false alarms
 and the typos caught are in docs/draft-readings.md ("Screening").
+- **tilt estimate** — each rest of the in-situ tilt estimate (``tilt_estimate`` rows, which
+  support Annex A.1's tilt bound) against the fit in θ of the other positions, by the
+  condition rule above with the A.4.3 drift over the dwell and the resolution as floors
+  (:func:`tilt_estimate_rule`); a reading that breaks it is set aside (a finding) and ψ is
+  estimated from the others.
 - **7.3 schedule** — each series of 7.3 holds the protocol's ``readings`` rounds, round n
   at t_1 + (n − 1) · ``interval_s`` (t_1 the series' median of time_s − (n − 1) · interval_s) (within ``ZS_SCHEDULE_TOLERANCE``
   of the interval): a missing round and an off-schedule reading are flagged, saying what
@@ -859,6 +864,91 @@ def _missing_in_series(g: pd.DataFrame, test: str, cond: str, file) -> list[Find
     return out
 
 
+#: The tilt estimate's clause as the findings name it (the test supports Annex A.1's bound).
+TILT_ESTIMATE_CLAUSE = "A.1"
+
+
+def tilt_estimate_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
+    """The screening rule of the in-situ tilt estimate's rows (``tilt_estimate``, one rest
+    per position; the estimate supports Annex A.1's tilt bound and A.4.2): each position's
+    reading against what the other positions say, by the condition rule of readings taken
+    once per position (:func:`line_departures`, its threshold and its small-sample factor
+    where it has one; no second threshold rule).
+
+    A rest at θ accumulates, over its dwell ``time_s``, the bias, the Earth rate along the
+    table axis and the tilt's first harmonic Ω_⊥ sin ψ cos(θ + α − β)
+    (:mod:`gonio.specs.ogam_draft.tilt_estimate`), plus a bias drift over the test (the
+    positions are read in order of θ: a line in θ). So d_j = the reading's indicated angle
+    (``gyro_deg``, else ``gyro_counts`` / K_ref), ″, scaled to the median dwell
+    (d_j · median(time_s) / time_j), is judged against the least-squares fit of the others
+    in θ (the line with cos θ, sin θ where ``HARMONIC_MIN`` others allow: the protocol's
+    12 positions; fewer positions are judged against the line alone, a looser rule); its
+    floors: ``DRIFT_Z`` times the drift Annex A.4.3's zero-stability bound allows over the
+    dwell (``zero_stability_dph`` × time_s: a rest's mean rate may wander by the bound) and
+    ``SPREAD_FLOOR_STEPS`` steps of the resolution (one count through K_ref, or the
+    ``gyro_deg`` column's step). A reading that breaks it is set aside with a finding (the
+    estimate is made from the others, :func:`apply_findings`); fewer than ``LINE_MIN``
+    readings are not judged (the estimate itself needs 4).
+
+    >>> th = np.arange(12) * 30.0
+    >>> cnt = 24750 + 19 * np.cos(np.radians(th + 40)) + np.array(
+    ...     [1, -2, 0, 2, -1, 1, 0, -2, 1, 2, -1, 0])
+    >>> df = pd.DataFrame({"test": "tilt_estimate", "series": 1, "round": np.arange(1, 13),
+    ...     "line": np.arange(33, 45), "orientation": "up", "time_s": 120.0,
+    ...     "table_deg": th, "gyro_counts": cnt, "gyro_deg": np.nan})
+    >>> tilt_estimate_rule(df, None, "r.csv", 76434.87, set())
+    []
+    >>> df.loc[3, "gyro_counts"] += 400
+    >>> [(f.line, f.code, f.action) for f in tilt_estimate_rule(df, None, "r.csv", 76434.87,
+    ...                                                          set())]
+    [(36, 'indicated-angle-outlier', 'set_aside')]
+    """
+    rows = df[(df["test"] == "tilt_estimate") & ~df["line"].isin(skip)]
+    if len(rows) < LINE_MIN:
+        return []
+    deg = rows["gyro_deg"].to_numpy(float) if "gyro_deg" in rows else np.full(len(rows), np.nan)
+    cnt = rows["gyro_counts"].to_numpy(float)
+    col = np.where(np.isfinite(deg), "gyro_deg", "gyro_counts")
+    ind = np.where(np.isfinite(deg), deg, cnt / k_ref if k_ref else np.nan)
+    t = rows["time_s"].to_numpy(float)
+    ok = np.isfinite(ind) & np.isfinite(t) & (t > 0) & np.isfinite(
+        rows["table_deg"].to_numpy(float))
+    g = rows[ok].assign(_col=col[ok])
+    if len(g) < LINE_MIN:
+        return []
+    t = t[ok]
+    dwell = float(np.median(t))
+    d = deg_to_arcsec(ind[ok]) * dwell / t
+    g = g.assign(_r=d)
+    step = _resolution_arcsec(g, k_ref, _deg_step(g, []) if (col[ok] == "gyro_deg").any()
+                              else None)
+    drift = allowed_drift_arcsec_per_s(protocol) * t
+    what = (f"tilt_estimate (in-situ tilt estimate, supports {TILT_ESTIMATE_CLAUSE}) at "
+            f"axis {g['orientation'].iloc[0]}")
+    out = []
+    for i, dev, thr, s, *_ in line_departures(g["table_deg"].to_numpy(float), d,
+                                              SPREAD_FLOOR_STEPS * step, 0.0, drift):
+        row = g.iloc[i]
+        by = (f" (K_ref = {k_ref:.9g} counts/° from the rotation readings)"
+              if row["_col"] == "gyro_counts" else "")
+        out.append(Finding(
+            "indicated-angle-outlier",
+            f"{what} position {int(row['round'])} ({float(row['table_deg']):g}°): the angle "
+            f"accumulated over its rest {d[i]:.6g}″ departs from the fit the other positions "
+            f"draw by {abs(dev):.4g}″ (> {thr:.3g}″; s = {s:.3g}″ of the others, drift "
+            f"allowed {drift[i]:.3g}″); set aside, ψ estimated from the other positions{by}",
+            "set_aside", file=file, line=int(row["line"]), column=str(row["_col"]),
+            test="tilt_estimate", clause=TILT_ESTIMATE_CLAUSE, rule=_TILT_RULE))
+    return out
+
+
+_TILT_RULE = ("the condition rule of readings taken once per position (|d − fit(others)| "
+              f"beyond the others' spread, with floors of {DRIFT_Z:g} × the A.4.3 zero-stability "
+              f"bound × the dwell and {SPREAD_FLOOR_STEPS:g} steps of resolution), d = the rest's indicated angle scaled to "
+              "the median dwell, fit = least squares in θ (line, cos θ, sin θ) through the other "
+              "positions")
+
+
 def screen(readings: Readings, protocol) -> list[Finding]:
     """Every finding on the readings of an optical-draft calibration (module docstring).
 
@@ -872,6 +962,7 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     out_lines = {f.line for f in found if f.action != "flagged"} | aside_lines
     k_ref = reference_scale_factor(df[~df["line"].isin(out_lines)], readings.metadata, file)
     found += _indicated_rule(df, protocol, name, k_ref, out_lines)
+    found += tilt_estimate_rule(df, protocol, name, k_ref, out_lines)
     gone = {f.line for f in found if f.action != "flagged"} | aside_lines
     found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]), df)
     found += zero_stability_schedule(df, protocol, name)
