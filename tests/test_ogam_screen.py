@@ -100,7 +100,7 @@ def test_one_degree_typo_in_a_7_4_reading_is_set_aside(bench_file, tmp_path, cap
     res = json.loads((tmp_path / "o" / "results.json").read_text())
     fd = [x for x in res["findings"] if x["line"] == i + 1]
     assert len(fd) == 1 and fd[0]["action"] == "set_aside" and fd[0]["column"] == "gyro_counts"
-    assert fd[0]["clause"] == "7.4" and "MAD" in fd[0]["rule"] and "K_ref" in fd[0]["message"]
+    assert fd[0]["clause"] == "7.4" and "t_ν⁻¹" in fd[0]["rule"] and "K_ref" in fd[0]["message"]
     assert i + 1 in {u["line"] for u in res["unused_readings"]}
     # R stays that of the healthy data (not 1 138″); E close to the clean file's
     assert res["items"]["repeatability"]["value"] < 1.0

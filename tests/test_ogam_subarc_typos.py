@@ -9,15 +9,25 @@ finds, and what reaches results.json, the certificate and the command line, is c
 from __future__ import annotations
 
 import json
+import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
+from scipy.stats import beta
 
 from gonio.cli import main
-from gonio.specs.ogam_draft.protocol import load_protocol
-from gonio.specs.ogam_draft.readings import read_readings
-from gonio.specs.ogam_draft.screen import SPREAD_FLOOR_STEPS, screen
+from gonio.formats.toml import read_toml
+from gonio.resources import resolve
+from gonio.specs.ogam_draft.bench import Bench, load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.readings import Readings, read_readings
+from gonio.specs.ogam_draft.screen import (HARMONIC_MIN, SPREAD_FLOOR_STEPS,
+                                           line_critical_value, line_departures, screen)
+from gonio.specs.ogam_draft.study import study_bench
 from gonio.units import ARCSEC_PER_DEG
 
 #: (test, rate, orientation, round) of the reading damaged in each clause.
@@ -121,3 +131,130 @@ def test_a_7_3_typo_is_set_aside_and_named_on_the_certificate(session, tmp_path,
     assert "1 reading(s) set aside" in page and f"line {line}:" in page
     assert "gyro_counts" in page and "departs from the line through its neighbours" in page
     assert str(line) in err
+
+
+# --- the condition rule's small-sample factor ---------------------------------------------
+
+def _deleted_t(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Each reading's externally studentized residual from the full least-squares fit, by
+    the closed form e_j / (s_(j) √(1 − h_jj)), s_(j)² = (Σe² − e_j²/(1 − h_jj)) / (n − p − 1)
+    (no refit: a second algorithm beside the rule's leave-one-out fits). ``y``: samples ×
+    n."""
+    n, p = X.shape
+    H = X @ np.linalg.pinv(X.T @ X) @ X.T
+    e = y - y @ H.T
+    h = np.diag(H)
+    s2 = ((e ** 2).sum(axis=1, keepdims=True) - e ** 2 / (1 - h)) / (n - p - 1)
+    return e / np.sqrt(s2 * (1 - h))
+
+
+def _design(n: int) -> np.ndarray:
+    x = np.arange(1, n + 1) * 360.0 / n
+    cols = [np.ones(n), x / 360.0]
+    if n - 1 >= HARMONIC_MIN:
+        cols += [np.cos(np.radians(x)), np.sin(np.radians(x))]
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize("n", [6, 12])
+def test_the_critical_value_against_a_monte_carlo_of_normal_readings(n):
+    """c = t_ν⁻¹(1 − α/(2n)): one reading's deleted residual exceeds it with probability
+    α/n and the largest of n with at most α (Bonferroni), checked on 40 000 groups of
+    normal readings (6 positions on a line: ν = 3; 12 with cos θ, sin θ: ν = 7)."""
+    X = _design(n)
+    nu = n - 1 - X.shape[1]
+    alpha = 0.3
+    c = line_critical_value(n, nu, alpha)
+    t = np.abs(_deleted_t(X, np.random.default_rng(n).standard_normal((40_000, n))))
+    one = float((t > c).mean())
+    se = math.sqrt(alpha / n * (1 - alpha / n) / t.size) * math.sqrt(n)  # within-group cor.
+    assert abs(one - alpha / n) < 4 * se, (one, alpha / n)
+    worst = float((t.max(axis=1) > c).mean())
+    assert 0.8 * alpha < worst <= alpha + 4 * math.sqrt(alpha * (1 - alpha) / t.shape[0])
+
+
+def test_the_rule_sets_aside_a_clean_normal_group_at_most_at_its_rate():
+    """line_departures on 3 000 groups of six normal readings on a line (ν = 3, no floor):
+    groups with a reading set aside ≤ α = 1 % (Clopper–Pearson); the former fixed 7 · s
+    set aside one in ~30 such groups."""
+    X = _design(6)
+    x = X[:, 1] * 360.0
+    rng = np.random.default_rng(20261204)
+    hits = sum(bool(line_departures(x, rng.standard_normal(6), 0.0, alpha=0.01))
+               for _ in range(3000))
+    lo = float(beta.ppf(0.025, hits, 3000 - hits + 1)) if hits else 0.0
+    assert lo <= 0.01, hits
+
+
+def small_programme(series: int, positions: int):
+    """The built-in protocol with every item, 7.1, 7.4, 7.6, 7.7 read in ``series`` series
+    at ``positions`` equally spaced stops (7.6 and 7.7 on 7.4's rounds)."""
+    raw = read_toml(resolve("ogam-draft", "protocol"))
+    step = 360.0 / positions
+    for key in ("scale_factor", "angle_deviation"):
+        raw[key]["rounds"] = [r for r in raw[key]["rounds"]
+                              if abs(r["stop_deg"] / step - round(r["stop_deg"] / step)) < 1e-9]
+    for key in ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency"):
+        raw[key]["series"] = series
+    return parse_protocol(raw, resolve("ogam-draft", "protocol"))
+
+
+def _sim(protocol, bench, seed):
+    res = run_session(protocol, bench, seed=seed)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return df, dict(res.metadata), res
+
+
+def tiny_programme():
+    """2 series × 3 positions of 7.4, 7.1 at two stops (tests/test_validate_engine.py)."""
+    return parse_protocol({
+        "protocol": {"name": "tiny"},
+        "session": {"static_s": 5.0, "warm_up_s": 0.0},
+        "scale_factor": {"rounds": [{"stop_deg": 180.0}, {"stop_deg": 360.0}],
+                         "read_delay_s": 2.0, "rest_s": 3.0},
+        "angle_deviation": {"series": 2, "rest_s": 3.0, "read_delay_s": 2.0,
+                            "rounds": [{"stop_deg": 120.0 * i} for i in range(1, 4)]}})
+
+
+@pytest.mark.parametrize("seed", [3340895419, 1, 2, 3, 4])
+def test_a_clean_small_programme_calibrates_with_nothing_set_aside(seed):
+    """Seed 3340895419 had a good 7.4 reading 1.904″ from the others' line set aside at
+    7 · s = 1.06″ (s from five readings' MAD)."""
+    p = tiny_programme()
+    bench = Bench("small", InstrumentConfig(nominal_scale_factor_counts_per_deg=76434.87,
+                                            arw_dpsh=0.003, quantisation=True),
+                  TableConfig(positioning_random_arcsec=0.05), latitude_deg=40.0,
+                  sample_rate_hz=10.0)
+    df, md, res = _sim(p, bench, seed)
+    assert [f.message for f in screen(Readings(df, md, None), p)
+            if f.action != "flagged"] == []
+    a = analyse(Readings(df, md, None), p, budget="draft", static_record=res.static_record)
+    assert a.results.angle_deviation.unused is None or not len(a.results.angle_deviation.unused)
+
+
+@pytest.fixture(scope="module")
+def small_rlg():
+    p = small_programme(2, 3)
+    return p, study_bench(load_bench("rlg"), 100.0)
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_a_5_arcsec_typo_in_a_small_programme_is_caught(small_rlg, seed):
+    """2 series × 3 positions on the RLG bench: clean, nothing set aside; 5″ planted in one
+    reading of 7.1, of 7.6 at 100 °/s and of 7.7 north is that test's only finding."""
+    p, bench = small_rlg
+    df, md, _ = _sim(p, bench, seed)
+    assert [f.message for f in screen(Readings(df, md, None), p)
+            if f.action != "flagged"] == []
+    k = float(md["nominal_scale_factor_counts_per_deg"])
+    for test, rate, orient in (("scale_factor", 60.0, "up"), ("rate_consistency", 100.0, "up"),
+                               ("pointing_consistency", 60.0, "north")):
+        i = int(np.flatnonzero((df["test"] == test) & (df["rate_dps"] == rate)
+                               & (df["orientation"] == orient) & (df["series"] == 1)
+                               & (df["round"] == 2))[0])
+        d2 = df.copy()
+        d2.at[i, "gyro_counts"] += round(5.0 / ARCSEC_PER_DEG * k)
+        found = [f for f in screen(Readings(d2, md, None), p) if f.action != "flagged"]
+        assert [(f.line, f.test) for f in found] == [(int(df.at[i, "line"]), test)], \
+            [f.message for f in found]

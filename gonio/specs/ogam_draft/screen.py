@@ -27,9 +27,12 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
     readings: d = r less the 7.4 reference round's median at the same angle (the position's
     own error), against the least-squares fit in the angle (a line; with cos θ, sin θ where
     12 positions allow) of the condition's other readings, leave one out, set aside when
-    ``|d − fit| > max(SPREAD_Z · s · √(1 + h), DRIFT_Z · drift, floor)``, s the others'
-    1.4826 · MAD (never below the reference's pooled s), drift the draft's zero-stability
-    bound times the reading's time from zeroing (:func:`line_departures`);
+    ``|d − fit| > max(c · s · √(1 + h), DRIFT_Z · drift, floor)``, s the others' residual
+    standard deviation (never below the reference's pooled s), c the Bonferroni critical
+    value of Student's t for the group's readings and s's degrees of freedom, so that a
+    clean session sets aside a reading with probability ≤ ``SCREEN_ALPHA``
+    (:func:`line_critical_value`), drift the draft's zero-stability bound times the
+    reading's time from zeroing (:func:`line_departures`);
   * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
@@ -71,6 +74,7 @@ import math
 
 import numpy as np
 import pandas as pd
+from scipy.stats import t as student_t
 
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.readings import Readings, metadata_float
@@ -404,13 +408,12 @@ HARMONIC_MIN: int = 9
 #: a clean reading 250–370 s after zeroing departed from the others' fit by up to 2.0 such
 #: drifts (clean sessions, docs/draft-readings.md "Screening"), 10.9 times the others' s.
 DRIFT_Z: float = 3.0
-#: Robust z of the condition rule (:func:`line_departures`) and of the 7.3 rule
-#: (:func:`_rest_spread`): the threshold is ``SPREAD_Z`` times the spread the group's other
-#: readings show (1.4826 · MAD of their residuals), so it follows the instrument's noise at
-#: that rate, position and time; never below ``SPREAD_FLOOR_STEPS`` steps of resolution.
-#: Measured on clean sessions of the built-in programme (docs/draft-readings.md,
-#: "Screening"): no false finding at 7 on 800 RLG and FOG sessions.
-SPREAD_Z: float = 7.0
+#: The probability that the condition rule (:func:`line_departures`) sets aside a reading of
+#: a clean session (every reading normal about its condition's fit): the session's groups
+#: judged by that rule share it (Bonferroni), each group's readings share its group's part
+#: (:func:`line_critical_value`). A reading set aside in 7.1, 7.6 or 7.7 refuses the
+#: calibration, so this is the chance that a good session is refused by this rule.
+SCREEN_ALPHA: float = 0.02
 #: Floor of the condition and 7.3 rules, in steps of the resolution (one count, or the
 #: ``gyro_deg`` column's step): where the others agree to a few counts their MAD is
 #: lumpy (see ``ROUND_FLOOR_STEPS``).
@@ -427,8 +430,34 @@ def _design(x_deg: np.ndarray, harmonic: bool) -> np.ndarray:
     return np.column_stack(cols)
 
 
+def line_critical_value(n_readings: int, dof: int, alpha: float = SCREEN_ALPHA) -> float:
+    """The small-sample factor c of the condition rule: the largest of ``n_readings``
+    leave-one-out residuals, each divided by s · √(1 + h), exceeds c with probability
+    ≤ ``alpha`` for normal readings, s having ``dof`` degrees of freedom.
+
+    The rule. A reading's departure from the least-squares fit of the others, divided by
+    the others' residual standard deviation s (ν = n_others − p) and √(1 + h), h its
+    leverage, is the externally studentized (deleted) residual; for independent normal
+    readings of equal variance it follows Student's t with ν degrees of freedom exactly
+    (the prediction interval of a new observation; Cook & Weisberg, *Residuals and
+    Influence in Regression*, 1982, §2.2.2; Beckman & Cook, Technometrics 25 (1983) 119,
+    the Bonferroni outlier test). The largest of the group's n such residuals exceeds c
+    with probability ≤ n · P(|t_ν| > c) (Bonferroni), so c = t_ν⁻¹(1 − α / (2n)); the
+    session's groups take α = ``SCREEN_ALPHA`` / their number (:func:`_indicated_rule`).
+    A fixed multiple of s (the former 7 · s) is exceeded far more often where s rests on
+    few values: with ν = 3, |t_3| > 7 has probability 0.6 % per reading.
+
+    >>> round(line_critical_value(6, 3, 0.01), 2), round(line_critical_value(12, 7, 0.01), 2)
+    (10.87, 5.58)
+    """
+    if n_readings < 1 or dof < 1 or not 0.0 < alpha < 1.0:
+        raise ValueError("line_critical_value needs n_readings ≥ 1, dof ≥ 1, 0 < alpha < 1")
+    return float(student_t.isf(alpha / (2.0 * n_readings), dof))
+
+
 def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: float = 0.0,
-                    drift_arcsec=None) -> list[tuple[int, float, float, float]]:
+                    drift_arcsec=None, alpha: float = SCREEN_ALPHA, pooled=None
+                    ) -> list[tuple[int, float, float, float, float]]:
     """The condition rule of readings taken once per position (7.1, 7.6, 7.7): each
     reading against the least-squares model in the table angle θ that the condition's
     other readings draw (leave one out). The readings of one rate or orientation differ
@@ -442,15 +471,21 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
 
     The candidate is the reading without which the others' residuals are smallest (a
     typo pulls the fit and widens the others' spread); it is set aside when
-    |d_j − fit(θ_j)| > max(``SPREAD_Z`` · s · √(1 + h_j), ``DRIFT_Z`` · drift_j,
-    ``floor_arcsec``), s =
-    max(1.4826 · MAD of the others' residuals · √(n/(n − p)), ``scale_min_arcsec``) over
-    the n others and p terms, h_j = x_jᵀ(XᵀX)⁻¹x_j (the fit's own uncertainty at θ_j),
+    |d_j − fit(θ_j)| > max(c · s · √(1 + h_j), ``DRIFT_Z`` · drift_j, ``floor_arcsec``),
+    s = max(√(Σ others' residuals² / (n − p)), ``scale_min_arcsec``) over the n others and
+    p terms, c = :func:`line_critical_value` (m, n − p, ``alpha``) for the m readings
+    judged (the group's share of the session's false-alarm probability); ``pooled`` =
+    (s_r, ν_r), a scale of the same readings' noise from elsewhere with its degrees of
+    freedom (the 7.4 reference at 7.1's own rate and orientation, :func:`_line_outliers`),
+    pools with the others' as s² = ((n − p) s_o² + ν_r s_r²) / (n − p + ν_r) on
+    n − p + ν_r degrees of freedom (the same t rule);
+    h_j = x_jᵀ(XᵀX)⁻¹x_j (the fit's own uncertainty at θ_j),
     drift_j the drift the instrument may accumulate from zeroing to reading j
     (``drift_arcsec``, :func:`_line_outliers`: the draft's zero-stability bound times
     time_s; 0 where not given): a slow turn's reading wanders with the bias over minutes
-    (1 °/s: 6 min for 360°) beyond what the other readings' spread shows; the rule then runs again on the others while ``LINE_MIN`` − 1 remain. Returns
-    (index, departure ″, threshold ″, s ″) of each reading set aside, in that order.
+    (1 °/s: 6 min for 360°) beyond what the other readings' spread shows; the rule then
+    runs again on the others while ``LINE_MIN`` − 1 remain. Returns (index, departure ″,
+    threshold ″, s ″, c) of each reading set aside, in that order.
 
     >>> x = np.arange(30.0, 361.0, 30.0)
     >>> d = 0.002 * x + np.array([0.1, -0.1, 0.0, 0.05, -0.05, 0.1, 0.0, -0.1, 0.05, 0.0,
@@ -458,7 +493,7 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
     >>> line_departures(x, d, 0.47)
     []
     >>> d[4] += 1.5
-    >>> [(i, round(dev, 2)) for i, dev, _, _ in line_departures(x, d, 0.47)]
+    >>> [(i, round(dev, 2)) for i, dev, *_ in line_departures(x, d, 0.47)]
     [(4, 1.42)]
     """
     x, d = np.asarray(x_deg, float), np.asarray(d_arcsec, float)
@@ -477,15 +512,18 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
                 best = (score, j, rest, e, coef)
         _, j, rest, e, coef = best
         n, p, k = rest.size, X.shape[1], idx[j]
-        s = max(1.4826 * float(np.median(np.abs(e - np.median(e)))) * math.sqrt(n / (n - p)),
-                float(scale_min_arcsec))
+        ss, dof = float(e @ e), n - p
+        if pooled is not None:
+            ss, dof = ss + pooled[1] * pooled[0] ** 2, dof + int(pooled[1])
+        s = max(math.sqrt(ss / dof), float(scale_min_arcsec))
         h = float(X[k] @ np.linalg.pinv(X[rest].T @ X[rest]) @ X[k])
         dev = float(d[k] - X[k] @ coef)
-        thr = max(SPREAD_Z * s * math.sqrt(1.0 + h), DRIFT_Z * float(drift[k]),
+        c = line_critical_value(idx.size, dof, alpha)
+        thr = max(c * s * math.sqrt(1.0 + h), DRIFT_Z * float(drift[k]),
                   float(floor_arcsec))
         if not abs(dev) > thr:
             break
-        out.append((int(k), dev, thr, s))
+        out.append((int(k), dev, thr, s, c))
         idx = rest
     return out
 
@@ -502,8 +540,13 @@ def allowed_drift_arcsec_per_s(protocol) -> float:
 def reference_rounds(work: pd.DataFrame, protocol):
     """The reference condition's rounds (7.4 at its rate and orientation, every round read
     in at least ``PER_ROUND_MIN`` series): their table angles (median of ``table_deg``,
-    °), the median of each round's r (″) and the pooled scale s = 1.4826 · median of every
-    reading's |r − its round's median| (″); None where the file has no such reference."""
+    °), the median of each round's r (″), the pooled scale s = 1.4826 · median of every
+    reading's |r − its round's median| (″), the position tolerance, and the noise of a
+    reading less its round's median, for :func:`line_departures`' ``pooled``: (s_d, ν),
+    s_d = √(Σ (r − round mean)² / ν) · √(1 + π / (2m)) (m the fewest series of a round:
+    the median's variance π σ² / (2m), large-m normal), ν = readings − rounds, over the
+    readings within ``ROUND_Z`` · s of their round's median (a typo the round rule sets
+    aside does not widen it); None where the file has no such reference."""
     it = getattr(protocol, "angle_deviation", None)
     if it is None:
         return None
@@ -516,42 +559,59 @@ def reference_rounds(work: pd.DataFrame, protocol):
     if per.size().min() < PER_ROUND_MIN:
         return None
     med = per["_r"].transform("median").to_numpy(float)
+    r = g["_r"].to_numpy(float)
+    s_mad = 1.4826 * float(np.median(np.abs(r - med)))
+    keep = np.abs(r - med) <= ROUND_Z * s_mad
+    rounds = g["round"].to_numpy()[keep]
+    dev = r[keep] - pd.Series(r[keep]).groupby(rounds).transform("mean").to_numpy(float)
+    nu = int(keep.sum()) - len(np.unique(rounds))
+    m = int(per.size().min())
+    pooled = ((math.sqrt(float(dev @ dev) / nu) * math.sqrt(1.0 + math.pi / (2.0 * m)), nu)
+              if nu > 0 else None)
     return (per["table_deg"].median().to_numpy(float), per["_r"].median().to_numpy(float),
-            1.4826 * float(np.median(np.abs(g["_r"].to_numpy(float) - med))),
-            float(it.position_tolerance_deg))
+            s_mad, float(it.position_tolerance_deg), pooled)
 
 
 def _line_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: float, ref,
-                   drift_arcsec_per_s: float = 0.0) -> list[Finding]:
+                   drift_arcsec_per_s: float = 0.0, alpha: float = SCREEN_ALPHA,
+                   same_condition: bool = False) -> list[Finding]:
     """The readings of a condition read once per position that break the condition rule
     (:func:`line_departures`), one finding each. Where every reading's angle is a
     reference round's (``ref``, :func:`reference_rounds`), each is taken less that round's
     median (the position's own error, common to every rate and orientation) and the
-    scale is never below the reference's pooled one."""
+    scale is never below the reference's pooled one; where the condition is the reference's
+    own (``same_condition``: 7.1 at 7.4's rate and orientation, the same instrument noise)
+    the reference's noise pools with the others' residuals (:func:`reference_rounds`);
+    ``alpha`` is the group's share of the session's false-alarm probability."""
     r = g["_r"].to_numpy(float)
     x = g["table_deg"].to_numpy(float)
-    d, s_min, less = r, 0.0, ""
+    d, s_min, less, pooled = r, 0.0, "", None
     if ref is not None:
-        ang, med, s_ref, tol = ref
+        ang, med, s_ref, tol, ref_noise = ref[:5]
         j = np.abs(x[:, None] - ang[None, :]).argmin(axis=1)
         if np.all(np.abs(ang[j] - x) <= tol):
             d, s_min = r - med[j], s_ref
             less = ", each reading less the 7.4 reference round's median at its angle"
+            if same_condition:
+                pooled = ref_noise
     drift = drift_arcsec_per_s * np.abs(g["time_s"].to_numpy(float))
     drift = np.where(np.isfinite(drift), drift, 0.0)
     found = [(i, f"the fit its condition's other readings draw{less}", dev, thr,
-              f"; s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
-             for i, dev, thr, s in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
-                                                   drift)]
+              f"; c = {c:.3g}, s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
+             for i, dev, thr, s, c in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
+                                                      drift, alpha, pooled)]
     return _departures(g, found, what, file, test, _LINE_RULE, k_ref)
 
 
-_LINE_RULE = (f"|d − line(others)| > max({SPREAD_Z:g} · s · √(1 + h), {SPREAD_FLOOR_STEPS:g} "
-              "steps of resolution), d = r less the 7.4 reference round's median at the same "
-              "angle (r where none), line = least squares in the table angle through the "
-              "condition's other readings, s = max(1.4826 · MAD of their residuals · "
-              "√(n/(n − 2)), the reference's pooled s), h its leverage; r = indicated − table "
-              "angle, indicated = gyro_deg or gyro_counts / K_ref")
+_LINE_RULE = (f"|d − line(others)| > max(c · s · √(1 + h), {DRIFT_Z:g} · drift, "
+              f"{SPREAD_FLOOR_STEPS:g} steps of resolution), d = r less the 7.4 reference "
+              "round's median at the same angle (r where none), line = least squares in the "
+              "table angle through the condition's other readings, s = max(√(Σ their "
+              "residuals² / ν), the reference's pooled s), ν = n − p (pooled with the 7.4 "
+              "reference's noise where the condition is the reference's), h its leverage, "
+              "c = t_ν⁻¹(1 − α/(2m)) for the m readings judged, α = "
+              f"{SCREEN_ALPHA:g} / the session's groups under this rule (Bonferroni); "
+              "r = indicated − table angle, indicated = gyro_deg or gyro_counts / K_ref")
 
 
 def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
@@ -572,15 +632,24 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
         else 0.0
     out = []
     keys = ["test", "rate_dps", "orientation"]
-    for key, g in rot.groupby(keys, sort=False):
+    groups = list(rot.groupby(keys, sort=False))
+    rule = ["round" if g.groupby("round", sort=False).size().min() >= PER_ROUND_MIN else
+            "line" if len(g) >= LINE_MIN else "median" for _, g in groups]
+    # the session's false-alarm probability of the condition rule, shared by its groups
+    alpha = SCREEN_ALPHA / max(rule.count("line"), 1)
+    for (key, g), how in zip(groups, rule):
         what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
         step = _resolution_arcsec(g, k_ref, deg_step)
-        if g.groupby("round", sort=False).size().min() >= PER_ROUND_MIN:
+        if how == "round":
             # many series: each reading against the other series of its round (an error
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
             out += _round_outliers(g, key[0], what, file, k_ref, step)
-        elif len(g) >= LINE_MIN:
-            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate)
+        elif how == "line":
+            ad = getattr(protocol, "angle_deviation", None)
+            same = (ad is not None and key[0] != "angle_deviation"
+                    and math.isclose(float(key[1]), ad.rate_dps) and key[2] == ad.orientation)
+            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha,
+                                  same)
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
