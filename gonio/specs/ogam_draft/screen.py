@@ -597,8 +597,8 @@ def _line_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: flo
     drift = drift_arcsec_per_s * np.abs(g["time_s"].to_numpy(float))
     drift = np.where(np.isfinite(drift), drift, 0.0)
     found = [(i, f"the fit its condition's other readings draw{less}", dev, thr,
-              f"; c = {c:.3g}, s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
-             for i, dev, thr, s, c in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
+              f"; s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
+             for i, dev, thr, s, _ in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
                                                       drift, alpha, pooled)]
     return _departures(g, found, what, file, test, _LINE_RULE, k_ref)
 
