@@ -9,8 +9,9 @@ trial seeds (``study.trial_seed(seed, case, i)``). For each session:
 * **sweep** (the first ``--sweep-trials`` trials of each case): for each of 7.1, 7.3, 7.6 and
   7.7 and each size (0.3″, 0.5″, 1″, 2″, 5″) one reading drawn at random is moved by the size
   (sign drawn; a whole number of counts for ``gyro_counts``, the size itself for
-  ``gyro_deg``) and the indicated-angle rule is run on the whole file (K_ref of the clean
-  file): caught = the planted line is found; "other" = a
+  ``gyro_deg``) and the indicated-angle rule is run on that test's readings and 7.4's
+  reference (K_ref of the clean file; the condition rule's false-alarm probability shared
+  by the whole session's groups, as in the full screening): caught = the planted line is found; "other" = a
   reading of the same test found that the clean file did not.
 
     python scripts/screen_typo_study.py --seed 20261202 --trials 25 --sweep-trials 10 \\
@@ -43,7 +44,8 @@ from gonio.resources import resolve
 from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.specs.ogam_draft.readings import Readings
-from gonio.specs.ogam_draft.screen import _indicated_rule, reference_scale_factor, screen
+from gonio.specs.ogam_draft.screen import (_indicated_rule, line_rule_groups,
+                                           reference_scale_factor, screen)
 from gonio.specs.ogam_draft.study import (case_bench, study_bench, study_protocol,
                                           trial_bench, trial_seed)
 from gonio.units import ARCSEC_PER_DEG
@@ -101,9 +103,11 @@ def sweep(df, md, protocol, name: str, caught, planted, other, sizes=SIZES) -> N
     k = float(md["nominal_scale_factor_counts_per_deg"])
     k_ref = reference_scale_factor(df, md)
     bench = name.split("_")[0]
+    groups = line_rule_groups(df)        # the whole session's, which share its alpha
     for test in TESTS:
         rows = np.flatnonzero((df["test"] == test).to_numpy())
-        before = {x.line for x in _indicated_rule(df, protocol, None, k_ref, set())
+        sub0 = df[df["test"].isin([test, "angle_deviation"])]
+        before = {x.line for x in _indicated_rule(sub0, protocol, None, k_ref, set(), groups)
                   if x.test == test}
         for size in sizes:
             i, sgn = int(rng.choice(rows)), int(rng.choice([-1, 1]))
@@ -112,8 +116,8 @@ def sweep(df, md, protocol, name: str, caught, planted, other, sizes=SIZES) -> N
                 d2.at[i, "gyro_deg"] += sgn * size / ARCSEC_PER_DEG
             else:
                 d2.at[i, "gyro_counts"] += sgn * round(size / ARCSEC_PER_DEG * k)
-            # the whole file: the session's groups share the rule's false-alarm probability
-            lines = {x.line for x in _indicated_rule(d2, protocol, None, k_ref, set())
+            sub = d2[d2["test"].isin([test, "angle_deviation"])]
+            lines = {x.line for x in _indicated_rule(sub, protocol, None, k_ref, set(), groups)
                      if x.test == test}
             key = (bench, test, size)
             planted[key] += 1

@@ -614,8 +614,28 @@ _LINE_RULE = (f"|d − line(others)| > max(c · s · √(1 + h), {DRIFT_Z:g} · 
               "r = indicated − table angle, indicated = gyro_deg or gyro_counts / K_ref")
 
 
-def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
-    """Each reading's indicated angle against what the other readings of its condition say."""
+def _group_rule(g: pd.DataFrame) -> str:
+    """Which rule judges a condition's readings: "round" (every round read in at least
+    ``PER_ROUND_MIN`` series), "line" (at least ``LINE_MIN`` readings), else "median"."""
+    if g.groupby("round", sort=False).size().min() >= PER_ROUND_MIN:
+        return "round"
+    return "line" if len(g) >= LINE_MIN else "median"
+
+
+def line_rule_groups(df: pd.DataFrame) -> int:
+    """The number of conditions of the rotation readings ``df`` the condition rule judges."""
+    rot = df[df["test"].isin(ROTATION_TESTS)]
+    return sum(_group_rule(g) == "line"
+               for _, g in rot.groupby(["test", "rate_dps", "orientation"], sort=False))
+
+
+def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
+                    line_groups: int | None = None) -> list[Finding]:
+    """Each reading's indicated angle against what the other readings of its condition say.
+
+    ``line_groups``: the number of the session's groups the condition rule judges, which
+    share ``SCREEN_ALPHA``, where ``df`` is a part of the session (a study that screens one
+    test and its reference); by default those of ``df``."""
     deg = df["gyro_deg"].to_numpy(float)
     cnt = df["gyro_counts"].to_numpy(float)
     ind = np.where(np.isfinite(deg), deg, cnt / k_ref if k_ref else np.nan)
@@ -633,10 +653,9 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
     out = []
     keys = ["test", "rate_dps", "orientation"]
     groups = list(rot.groupby(keys, sort=False))
-    rule = ["round" if g.groupby("round", sort=False).size().min() >= PER_ROUND_MIN else
-            "line" if len(g) >= LINE_MIN else "median" for _, g in groups]
+    rule = [_group_rule(g) for _, g in groups]
     # the session's false-alarm probability of the condition rule, shared by its groups
-    alpha = SCREEN_ALPHA / max(rule.count("line"), 1)
+    alpha = SCREEN_ALPHA / max(line_groups or rule.count("line"), 1)
     for (key, g), how in zip(groups, rule):
         what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
         step = _resolution_arcsec(g, k_ref, deg_step)
