@@ -456,7 +456,7 @@ def line_critical_value(n_readings: int, dof: int, alpha: float = SCREEN_ALPHA) 
 
 
 def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: float = 0.0,
-                    drift_arcsec=None, alpha: float = SCREEN_ALPHA, pooled=None
+                    drift_arcsec=None, alpha: float = SCREEN_ALPHA
                     ) -> list[tuple[int, float, float, float, float]]:
     """The condition rule of readings taken once per position (7.1, 7.6, 7.7): each
     reading against the least-squares model in the table angle θ that the condition's
@@ -474,11 +474,10 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
     |d_j − fit(θ_j)| > max(c · s · √(1 + h_j), ``DRIFT_Z`` · drift_j, ``floor_arcsec``),
     s = max(√(Σ others' residuals² / (n − p)), ``scale_min_arcsec``) over the n others and
     p terms, c = :func:`line_critical_value` (m, n − p, ``alpha``) for the m readings
-    judged (the group's share of the session's false-alarm probability); ``pooled`` =
-    (s_r, ν_r), a scale of the same readings' noise from elsewhere with its degrees of
-    freedom (the 7.4 reference at 7.1's own rate and orientation, :func:`_line_outliers`),
-    pools with the others' as s² = ((n − p) s_o² + ν_r s_r²) / (n − p + ν_r) on
-    n − p + ν_r degrees of freedom (the same t rule);
+    judged (the group's share of the session's false-alarm probability). The 7.4
+    reference's scatter is not pooled into s even where the condition is the reference's
+    (7.1): a clean FOG 7.1 reading departed 4.4 such pooled s from the others' line (the
+    fit's misfit, which only the others' own residuals show);
     h_j = x_jᵀ(XᵀX)⁻¹x_j (the fit's own uncertainty at θ_j),
     drift_j the drift the instrument may accumulate from zeroing to reading j
     (``drift_arcsec``, :func:`_line_outliers`: the draft's zero-stability bound times
@@ -512,10 +511,8 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
                 best = (score, j, rest, e, coef)
         _, j, rest, e, coef = best
         n, p, k = rest.size, X.shape[1], idx[j]
-        ss, dof = float(e @ e), n - p
-        if pooled is not None:
-            ss, dof = ss + pooled[1] * pooled[0] ** 2, dof + int(pooled[1])
-        s = max(math.sqrt(ss / dof), float(scale_min_arcsec))
+        dof = n - p
+        s = max(math.sqrt(float(e @ e) / dof), float(scale_min_arcsec))
         h = float(X[k] @ np.linalg.pinv(X[rest].T @ X[rest]) @ X[k])
         dev = float(d[k] - X[k] @ coef)
         c = line_critical_value(idx.size, dof, alpha)
@@ -541,12 +538,8 @@ def reference_rounds(work: pd.DataFrame, protocol):
     """The reference condition's rounds (7.4 at its rate and orientation, every round read
     in at least ``PER_ROUND_MIN`` series): their table angles (median of ``table_deg``,
     °), the median of each round's r (″), the pooled scale s = 1.4826 · median of every
-    reading's |r − its round's median| (″), the position tolerance, and the noise of a
-    reading less its round's median, for :func:`line_departures`' ``pooled``: (s_d, ν),
-    s_d = √(Σ (r − round mean)² / ν) · √(1 + π / (2m)) (m the fewest series of a round:
-    the median's variance π σ² / (2m), large-m normal), ν = readings − rounds, over the
-    readings within ``ROUND_Z`` · s of their round's median (a typo the round rule sets
-    aside does not widen it); None where the file has no such reference."""
+    reading's |r − its round's median| (″) and the position tolerance; None where the
+    file has no such reference."""
     it = getattr(protocol, "angle_deviation", None)
     if it is None:
         return None
@@ -559,47 +552,34 @@ def reference_rounds(work: pd.DataFrame, protocol):
     if per.size().min() < PER_ROUND_MIN:
         return None
     med = per["_r"].transform("median").to_numpy(float)
-    r = g["_r"].to_numpy(float)
-    s_mad = 1.4826 * float(np.median(np.abs(r - med)))
-    keep = np.abs(r - med) <= ROUND_Z * s_mad
-    rounds = g["round"].to_numpy()[keep]
-    dev = r[keep] - pd.Series(r[keep]).groupby(rounds).transform("mean").to_numpy(float)
-    nu = int(keep.sum()) - len(np.unique(rounds))
-    m = int(per.size().min())
-    pooled = ((math.sqrt(float(dev @ dev) / nu) * math.sqrt(1.0 + math.pi / (2.0 * m)), nu)
-              if nu > 0 else None)
     return (per["table_deg"].median().to_numpy(float), per["_r"].median().to_numpy(float),
-            s_mad, float(it.position_tolerance_deg), pooled)
+            1.4826 * float(np.median(np.abs(g["_r"].to_numpy(float) - med))),
+            float(it.position_tolerance_deg))
 
 
 def _line_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: float, ref,
-                   drift_arcsec_per_s: float = 0.0, alpha: float = SCREEN_ALPHA,
-                   same_condition: bool = False) -> list[Finding]:
+                   drift_arcsec_per_s: float = 0.0, alpha: float = SCREEN_ALPHA
+                   ) -> list[Finding]:
     """The readings of a condition read once per position that break the condition rule
     (:func:`line_departures`), one finding each. Where every reading's angle is a
     reference round's (``ref``, :func:`reference_rounds`), each is taken less that round's
     median (the position's own error, common to every rate and orientation) and the
-    scale is never below the reference's pooled one; where the condition is the reference's
-    own (``same_condition``: 7.1 at 7.4's rate and orientation, the same instrument noise)
-    the reference's noise pools with the others' residuals (:func:`reference_rounds`);
-    ``alpha`` is the group's share of the session's false-alarm probability."""
+    scale is never below the reference's pooled one; ``alpha`` is the group's share of the session's false-alarm probability."""
     r = g["_r"].to_numpy(float)
     x = g["table_deg"].to_numpy(float)
-    d, s_min, less, pooled = r, 0.0, "", None
+    d, s_min, less = r, 0.0, ""
     if ref is not None:
-        ang, med, s_ref, tol, ref_noise = ref[:5]
+        ang, med, s_ref, tol = ref
         j = np.abs(x[:, None] - ang[None, :]).argmin(axis=1)
         if np.all(np.abs(ang[j] - x) <= tol):
             d, s_min = r - med[j], s_ref
             less = ", each reading less the 7.4 reference round's median at its angle"
-            if same_condition:
-                pooled = ref_noise
     drift = drift_arcsec_per_s * np.abs(g["time_s"].to_numpy(float))
     drift = np.where(np.isfinite(drift), drift, 0.0)
     found = [(i, f"the fit its condition's other readings draw{less}", dev, thr,
               f"; s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
              for i, dev, thr, s, _ in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
-                                                      drift, alpha, pooled)]
+                                                      drift, alpha)]
     return _departures(g, found, what, file, test, _LINE_RULE, k_ref)
 
 
@@ -607,8 +587,7 @@ _LINE_RULE = (f"|d − line(others)| > max(c · s · √(1 + h), {DRIFT_Z:g} · 
               f"{SPREAD_FLOOR_STEPS:g} steps of resolution), d = r less the 7.4 reference "
               "round's median at the same angle (r where none), line = least squares in the "
               "table angle through the condition's other readings, s = max(√(Σ their "
-              "residuals² / ν), the reference's pooled s), ν = n − p (pooled with the 7.4 "
-              "reference's noise where the condition is the reference's), h its leverage, "
+              "residuals² / ν), the reference's pooled s), ν = n − p, h its leverage, "
               "c = t_ν⁻¹(1 − α/(2m)) for the m readings judged, α = "
               f"{SCREEN_ALPHA:g} / the session's groups under this rule (Bonferroni); "
               "r = indicated − table angle, indicated = gyro_deg or gyro_counts / K_ref")
@@ -664,11 +643,7 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
             out += _round_outliers(g, key[0], what, file, k_ref, step)
         elif how == "line":
-            ad = getattr(protocol, "angle_deviation", None)
-            same = (ad is not None and key[0] != "angle_deviation"
-                    and math.isclose(float(key[1]), ad.rate_dps) and key[2] == ad.orientation)
-            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha,
-                                  same)
+            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha)
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
