@@ -1,6 +1,8 @@
 """Items stated y ± U are decided on the value and U as printed, against the limit as given,
 exactly (as the items stated by an interval are): a printed value above a printed limit never
-passes. The printed numbers are worked here independently of gonio's statement code (U to two
+passes; and never less strictly than on the measured value before rounding: a measured value
+beyond a limit never passes because its printed value rounds back inside (the stricter of the
+two outcomes is stated, with a note naming the measured value). The printed numbers are worked here independently of gonio's statement code (U to two
 significant digits, the value half up at U's place); the expected outcomes are the rule's
 closed forms (ILAC-G8:09/2019 4.2, JCGM 106 8.3.2) on those numbers."""
 
@@ -60,12 +62,12 @@ def test_a_printed_value_below_a_lower_limit_fails():
 
 def test_a_printed_value_on_the_limit_passes():
     """The limits are part of the acceptance interval (JCGM 106 3.3.9): printed 76434.847
-    against an upper limit 76434.847 passes, though the unrounded value is above it; and a
+    against an upper limit 76434.847 passes where the measured value is on or below it; and a
     guarded limit T_U − U at the printed U is met exactly (no float residue)."""
-    y, U = 76434.84704, 0.0105
+    y, U = 76434.84696, 0.0105
     (c,) = decide_items(k_result(y, U), [{"item": "scale_factor", "upper": 76434.847}],
                         {"rule": "simple"})
-    assert c.outcome == "pass"
+    assert c.outcome == "pass" and c.decided_on_measured is None
     # guarded r = 1: accepted when printed y ≤ T_U − printed U; T_U − U = 76434.847 exactly
     (c,) = decide_items(k_result(76434.84698, 0.02300001),
                         [{"item": "scale_factor", "upper": 76434.87}], {"rule": "guarded"})
@@ -73,6 +75,40 @@ def test_a_printed_value_on_the_limit_passes():
     (c,) = decide_items(k_result(76434.84751, 0.02300001),     # prints 76434.848
                         [{"item": "scale_factor", "upper": 76434.87}], {"rule": "guarded"})
     assert c.outcome == "fail"
+
+
+def test_the_reviewers_measured_value_beyond_the_limit_fails():
+    """K = 76434.8464, U = 0.0105 prints 76434.846 ± 0.011; simple acceptance with an upper
+    limit 76434.8462: the printed value lies inside, the measured value beyond it. A value
+    rounded towards the limit never turns a fail into a pass: "fail", and the measured value
+    that decided it is kept for the certificate's note."""
+    y, U = 76434.8464, 0.0105
+    yp, _ = printed(y, U)
+    assert str(yp) == "76434.846" and yp < Decimal("76434.8462") < Decimal(repr(y))
+    (c,) = decide_items(k_result(y, U), [{"item": "scale_factor", "upper": 76434.8462}],
+                        {"rule": "simple"})
+    assert c.outcome == "fail" and not c.accepted
+    assert c.decided_on_measured == "76434.8464" and c.value == float(yp)
+    # guarded, r = 1: printed 76434.846 + 0.010 = 76434.856 ≤ 76434.8565 passes on the
+    # printed numbers; the measured y + U = 76434.85698 lies beyond it
+    assert printed(76434.84649, 0.01049) == (Decimal("76434.846"), Decimal("0.010"))
+    (c,) = decide_items(k_result(76434.84649, 0.01049), [{"item": "scale_factor",
+                                                          "upper": 76434.8565}],
+                        {"rule": "guarded"})
+    assert c.outcome == "fail" and c.decided_on_measured == "76434.84649"
+
+
+def closed_form(rule: str, y: Decimal, w: Decimal, w_lo: Decimal, L: Decimal, H: Decimal) -> str:
+    """ILAC-G8:09/2019 4.2.1–4.2.3 on one value y with guard bands w (upper), w_lo (lower)."""
+    in_tol = L <= y <= H
+    in_acc = L + w_lo <= y <= H - w
+    if rule == "non-binary":
+        return ("pass" if in_acc else "conditional pass" if in_tol else
+                "conditional fail" if (L - y <= w and y - H <= w) else "fail")
+    return "pass" if in_acc else "fail"
+
+
+STRICTNESS = ("pass", "conditional pass", "conditional fail", "fail")
 
 
 @pytest.mark.parametrize("rule", ["simple", "guarded", "non-binary"])
@@ -94,15 +130,13 @@ def test_the_outcome_is_that_of_the_printed_numbers(rule):
                             {"rule": rule, "guard_band_factor": 1.0})
         L, H = Decimal(repr(lo)), Decimal(repr(hi))
         w = Decimal(0) if rule == "simple" else Up
-        in_tol = L <= yp <= H
-        in_acc = L + w <= yp <= H - w
-        if rule == "non-binary":
-            want = ("pass" if in_acc else "conditional pass" if in_tol else
-                    "conditional fail" if (L - yp <= w and yp - H <= w) else "fail")
-        else:
-            want = "pass" if in_acc else "fail"
+        w_raw = Decimal(0) if rule == "simple" else Decimal(repr(U))
+        on_printed = closed_form(rule, yp, w, w, L, H)
+        on_measured = closed_form(rule, Decimal(repr(y)), w_raw, w_raw, L, H)
+        want = max(on_printed, on_measured, key=STRICTNESS.index)
         assert c.outcome == want, (y, U, lo, hi, c)
-        if not in_tol:
+        assert (c.decided_on_measured is not None) == (want != on_printed)
+        if not (L <= yp <= H and L <= Decimal(repr(y)) <= H):
             assert not c.accepted
 
 
@@ -164,3 +198,46 @@ def test_k_through_gonio_calibrate_with_a_simple_rule(tmp_path, capsys):
     html = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
                                       (tmp_path / "b" / "certificate.html").read_text()))
     assert str(mid) in html and str(yp) in html
+
+
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, capsys, lang):
+    """From the outside: a limit between the printed K and the unrounded K on the printed
+    value's side: the printed K lies inside, the measured K beyond: the certificate states
+    fail and its note names the measured value; results.json keeps it."""
+    from gonio.cli import main
+
+    proto = ROOT / "tests" / "data" / "small-protocol.toml"
+    assert main(["simulate", "--protocol", str(proto), "--seed", "2414", "--out",
+                 str(tmp_path / "sim")]) == 0
+    rd = tmp_path / "sim" / "readings.csv"
+    assert main(["calibrate", str(rd), "--protocol", str(proto), "--out",
+                 str(tmp_path / "a")]) == 0
+    k = json.loads((tmp_path / "a" / "results.json").read_text())["items"]["scale_factor"]
+    y, U = k["value"], k["uncertainty"]["U"]
+    yp, _ = printed(y, U)
+    yd = Decimal(repr(y))
+    assert yp != yd
+    mid = Decimal(repr(float((yd + yp) / 2)))
+    # the limit on the measured value's far side: the printed value passes, the measured not
+    side = "upper" if yd > yp else "lower"
+    other = ("lower", yp - 1) if side == "upper" else ("upper", yp + 1)
+    lab = (ROOT / "protocols" / "lab-example.toml").read_text()
+    lab = re.sub(r'\[decision_rule\]\nrule = "non-binary"\nguard_band_factor = 1.0',
+                 '[decision_rule]\nrule = "simple"', lab)
+    lab += (f'\n[[specification_limits]]\nitem = "scale_factor"\n{side} = {mid}\n'
+            f'{other[0]} = {other[1]}\nsource = "test"\n')
+    (tmp_path / "lab.toml").write_text(lab)
+    capsys.readouterr()
+    assert main(["calibrate", str(rd), "--protocol", str(proto), "--lab",
+                 str(tmp_path / "lab.toml"), "--lang", lang, "--out", str(tmp_path / "b")]) == 0
+    capsys.readouterr()
+    c = json.loads((tmp_path / "b" / "results.json").read_text())["items"]["scale_factor"][
+        "conformity"]
+    assert c["outcome"] == "fail" and c["value"] == float(yp)
+    assert c["decided_on_measured"] == f"{y:.10g}"
+    html = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
+                                      (tmp_path / "b" / "certificate.html").read_text()))
+    assert f"{y:.10g}" in html
+    assert ("Decided on the measured value before rounding" in html) == (lang == "en")
+    assert ("按修约前的测得值判定" in html) == (lang == "zh")

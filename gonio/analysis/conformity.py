@@ -425,13 +425,55 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
         y, U, dec, _ = stated_value_of(it)
         c = decide(key, float(y), float(U), float(unc.k), bounds, rule,
                    chi2_nu=chi2_nu, no_probability=no_p)
-        c = replace(c, **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds,
-                                           dec))
+        raw = decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
+                     chi2_nu=chi2_nu, no_probability=no_p)
+        c = replace(stricter_of(c, raw, it.value),
+                    **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds, dec))
     c = replace(c, limits_from=origin)
     lo, hi = c.acceptance_lower, c.acceptance_upper
     return replace(c, acceptance_empty=bool(
         (lo is not None and hi is not None and lo > hi)
         or (it.nonnegative and hi is not None and hi < 0)))
+
+
+#: Outcomes from the least to the most strict (:func:`stricter_of`).
+OUTCOME_STRICTNESS: tuple[str, ...] = ("pass", "conditional pass", "conditional fail", "fail")
+
+
+def stricter_of(printed: Conformity, measured: Conformity, value: float) -> Conformity:
+    """The decision on what the certificate prints (``printed``), made no less strict by the
+    decision on the measured value before rounding (``measured``; ILAC-G8:09/2019 4.2 decides
+    on the measurement result, not on its rounded text). Rounding a value to its printed
+    digits moves it by up to half a unit of the last digit, towards or away from a limit: a
+    printed value above a printed limit never passes (the printed decision), and a measured
+    value beyond a limit never passes because its printed value rounds back inside (the
+    measured decision). Where the measured decision is the stricter, its outcome is stated
+    and ``decided_on_measured`` holds the measured value that decided it (10 significant
+    digits, the text every output prints),
+    so that the certificate can say why a printed value inside the limit does not pass;
+    everything else (acceptance limits, probabilities) stays the printed decision's.
+
+    >>> from gonio.analysis.conformity import decide, Limits, DecisionRule
+    >>> r = DecisionRule("simple")
+    >>> a = decide("K", 76434.846, 0.011, 2.0, Limits(None, 76434.8462), r)
+    >>> b = decide("K", 76434.8464, 0.0105, 2.0, Limits(None, 76434.8462), r)
+    >>> c = stricter_of(a, b, 76434.8464)
+    >>> a.outcome, b.outcome, c.outcome, c.accepted, c.decided_on_measured
+    ('pass', 'fail', 'fail', False, '76434.8464')
+    >>> stricter_of(b, a, 76434.846).decided_on_measured is None
+    True
+    """
+    rank = OUTCOME_STRICTNESS.index
+    if (printed.outcome is None or measured.outcome is None
+            or rank(measured.outcome) <= rank(printed.outcome)):
+        return printed
+    p_c = printed.conformance_probability
+    return replace(printed, outcome=measured.outcome, accepted=measured.accepted,
+                   decided_on_measured=f"{float(value):.10g}",
+                   false_accept_probability=(None if not measured.accepted or p_c is None
+                                             else 1.0 - p_c),
+                   false_reject_probability=None if measured.accepted else p_c,
+                   false_accept_bound=None)
 
 
 def _acceptance_texts(a_lo: float | None, a_hi: float | None, bounds: Limits,
@@ -571,25 +613,34 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     r = Decimal(repr(float(rule.guard_factor)))
     T_L = None if bounds.lower is None or magnitude else Decimal(repr(float(bounds.lower)))
     T_U = None if bounds.upper is None else Decimal(repr(float(bounds.upper)))
-    in_tol = (T_L is None or v >= T_L) and (T_U is None or v <= T_U)
     if rule.kind == "simple":
         a_lo, a_hi, w = T_L, T_U, Decimal(0)
-        outcome = "pass" if in_tol else "fail"
     else:
         w = r * U
         a_lo = None if T_L is None else T_L + (r - 1) * U
         a_hi = None if T_U is None else T_U - (r - 1) * U
-        in_acc = (a_lo is None or lo >= a_lo) and (a_hi is None or hi <= a_hi)
-        if in_acc:
-            outcome = "pass"
-        elif rule.kind == "guarded":
-            outcome = "fail"
-        elif in_tol:
-            outcome = "conditional pass"
-        else:
-            reach = ((T_U is None or lo - (r - 1) * U <= T_U)
-                     and (T_L is None or hi + (r - 1) * U >= T_L))
-            outcome = "conditional fail" if reach else "fail"
+
+    def outcome_of(v, lo, hi) -> str:
+        in_tol = (T_L is None or v >= T_L) and (T_U is None or v <= T_U)
+        if rule.kind == "simple":
+            return "pass" if in_tol else "fail"
+        if (a_lo is None or lo >= a_lo) and (a_hi is None or hi <= a_hi):
+            return "pass"
+        if rule.kind == "guarded":
+            return "fail"
+        if in_tol:
+            return "conditional pass"
+        reach = ((T_U is None or lo - (r - 1) * U <= T_U)
+                 and (T_L is None or hi + (r - 1) * U >= T_L))
+        return "conditional fail" if reach else "fail"
+
+    outcome = outcome_of(v, lo, hi)
+    # the measured value and interval before rounding (stricter_of): a value stated by its
+    # bound alone (below zero) is its interval's lower end, as stated_interval_of takes it
+    D = (lambda x: Decimal(repr(float(x))))  # noqa: E731
+    raw_lo, raw_hi = (D(x) for x in unc.interval)
+    raw_v = raw_lo if v == lo and float(it.value) < float(unc.interval[0]) else D(it.value)
+    raw_outcome = outcome_of(raw_v, raw_lo, raw_hi)
     chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
         and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
     if chi2:
@@ -606,7 +657,7 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
              and p_c is None else None)
     f = (lambda x: None if x is None else float(x))  # noqa: E731
     texts = _acceptance_texts(f(a_lo), f(a_hi), bounds, dec)
-    return Conformity(
+    c = Conformity(
         item=key, value=float(v), U=float(U), k=None, lower=bounds.lower, upper=bounds.upper,
         rule=rule.kind, guard_band=float(w), acceptance_lower=f(a_lo),
         acceptance_upper=f(a_hi), outcome=outcome, accepted=accepted,
@@ -617,6 +668,9 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
         acceptance_of="value" if rule.kind == "simple" else "interval",
         stated_interval=printed[1:], stated_value=printed[0],
         false_accept_bound=bound, **texts)
+    return stricter_of(c, replace(c, outcome=raw_outcome,
+                                  accepted=raw_outcome in ("pass", "conditional pass")),
+                       float(raw_v))
 
 
 def _plain(d: Decimal, keep: bool = False) -> str:

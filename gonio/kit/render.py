@@ -22,7 +22,8 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :func:`parse_display`,
                                 :class:`Num`, :class:`NoBreakText`, :func:`num`,
                                 :func:`lookup`, :func:`item_nums`,
-                                :func:`conformity_texts`, :func:`no_probability_note`, :func:`condition_text`,
+                                :func:`conformity_texts`, :func:`no_probability_note`,
+                                :func:`measured_note`, :func:`condition_text`,
                                 :func:`interval_band_note`, :func:`declaration_parts`, :func:`interval_legend`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
                                 :func:`legend_above`, :func:`plain_axes`,
@@ -60,8 +61,8 @@ from gonio.report.provenance import is_virtual
 from gonio.report.render import (Block, font_families, render_html, render_pdf,
                                  render_pdf_figures)
 from gonio.report.stated import (NoBreakText, Num, conformity_texts, declaration_parts,
-                                 interval_legend, item_nums, lookup, interval_band_note, no_probability_note,
-                                 num)
+                                 interval_legend, item_nums, lookup, interval_band_note,
+                                 measured_note, no_probability_note, num)
 from gonio.report.text import clean_tree
 
 __all__ = [
@@ -70,7 +71,8 @@ __all__ = [
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
-    "no_probability_note", "interval_band_note", "declaration_parts", "interval_legend",
+    "no_probability_note", "measured_note", "interval_band_note", "declaration_parts",
+    "interval_legend",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",

@@ -288,6 +288,12 @@ LABELS: dict[str, dict[str, str]] = {
                     "zh": "“—”：{items} 不给出概率：其分布不是 gonio 所计算的分布（95 % 区间不是正态"
                           "分布或 χ² 分布的区间，或包含因子 k 来自非正态的合成分布），正态模型 N(y, u) "
                           "与之矛盾（JCGM 106:2012 取被测量自身的分布）；判定依据所给区间或 y ± U 作出。"},
+    "c_measured_note": {"en": "Decided on the measured value before rounding ({items}): it lies "
+                              "beyond the acceptance limit where the printed value, rounded to "
+                              "the digits stated, does not; the stricter outcome is stated "
+                              "(ILAC-G8:09/2019 decides on the measurement result).",
+                        "zh": "按修约前的测得值判定（{items}）：该值超出接受限，而修约到所给位数的"
+                              "打印值未超出；给出较严格的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
     "c_interval_band_note": {
         "en": "Guard band of an item stated by its 95 % interval alone ({items}): U in w = r·U "
               "is the half-width of that interval as stated, (upper end − lower end)/2 "

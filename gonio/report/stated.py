@@ -265,6 +265,23 @@ def no_probability_note(decided, L: dict, name_of, with_pc: bool = True) -> str:
         items=sep.join(name_of(k) for k in keys))
 
 
+def measured_note(decided, L: dict, name_of, unit_of=None) -> str:
+    """The note under a conformity table for the items whose outcome the measured value before
+    rounding decided (results.json ``conformity.decided_on_measured``,
+    :func:`gonio.analysis.conformity.stricter_of`): their printed value lies inside the
+    acceptance limit, the measured value beyond it, and the stricter outcome is stated. ""
+    where there is none. ``decided``: (key, conformity) pairs (dicts or Conformity)."""
+    def of(c):
+        return c.get("decided_on_measured") if isinstance(c, dict) else getattr(
+            c, "decided_on_measured", None)
+    parts = [f"{name_of(k)} = {of(c).replace('-', '−')}"
+             + (f" {unit_of(k)}" if unit_of and unit_of(k) else "")
+             for k, c in decided if c and of(c)]
+    if not parts:
+        return ""
+    return L["c_measured_note"].format(items="; ".join(parts))
+
+
 def c_outcome(c):
     """A decision's outcome (a Conformity or its results.json dict), None where none."""
     return c.get("outcome") if isinstance(c, dict) else getattr(c, "outcome", None)
@@ -351,9 +368,10 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
     out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
                                 L["c_pc"], L["c_pfa"]], rows),
                      {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))
-    note = no_probability_note(decided, L, name_of)
-    if note:
-        out.append(block("p", [note], None))
+    for note in (no_probability_note(decided, L, name_of),
+                 measured_note(decided, L, name_of, unit_of)):
+        if note:
+            out.append(block("p", [note], None))
     sources = list(dict.fromkeys(c.get("source") or "—" for _, c in decided
                                  if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN))
     if sources:

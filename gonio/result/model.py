@@ -207,6 +207,9 @@ class Conformity:
     #: its stated interval (the measurand lies above the interval's upper end with at most
     #: that probability), else None
     false_accept_bound: float | None = None
+    #: the measured value (before rounding, as text) where it decided a stricter outcome than
+    #: the printed value would (:func:`gonio.analysis.conformity.stricter_of`), else None
+    decided_on_measured: str | None = None
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

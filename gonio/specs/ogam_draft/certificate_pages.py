@@ -36,7 +36,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
                               interval_band_note, interval_legend,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
-                              label_translator, labels, meta_text, no_probability_note, num,
+                              label_translator, labels, measured_note, meta_text, no_probability_note, num,
                               opening_blocks,
                               reason_text, render_html,
                               render_pdf_figures, rule_at_U, signature_blocks)
@@ -349,10 +349,11 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
                                  else f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
         add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
-        note = no_probability_note([(e["item"], e["conformity"]) for e in conf], L,
-                                   lambda k: L[k], with_pc=False)   # no such column here
-        if note:
-            add("p", [note])
+        pairs = [(e["item"], e["conformity"]) for e in conf]
+        for note in (no_probability_note(pairs, L, lambda k: L[k], with_pc=False),  # no column
+                     measured_note(pairs, L, lambda k: L[k])):
+            if note:
+                add("p", [note])
 
 
 
