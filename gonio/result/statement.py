@@ -304,9 +304,9 @@ def p_relation(p: str | None) -> str:
 def p_text(p: float | None) -> str | None:
     """A coverage probability (a fraction) in per cent, as every output states it.
 
-    A probability chosen by the procedure (one written with at most two decimals in per
-    cent: 0.95, 0.9545 — the t-factors of EA-4/02 Annex E — 0.99, 0.9973) is stated as
-    chosen, "95", "95.45", so that the certificate, summary.txt, results.json (0.9545) and
+    A probability chosen by the procedure (exactly one of :data:`CHOSEN_P_TEXTS` in per cent:
+    0.95, 0.9545 — the t-factors of EA-4/02 Annex E — 0.9973; or a whole per cent, 0.99) is
+    stated as chosen, "95", "95.45", so that the certificate, summary.txt, results.json (0.9545) and
     the DCC (``si:coverageProbability`` 0.9545) state one p. A probability computed from a
     distribution (the coverage an interval of whole grid steps reaches: 0.99465…) is stated
     to 2 significant digits, **rounded down** at the digits printed: a computed coverage is
@@ -325,6 +325,13 @@ def p_text(p: float | None) -> str | None:
     ('99.6', '99.998', '99.999')
     >>> p_text(1.0)
     '100'
+
+    A computed p whose digits would read as a chosen one takes one more decimal, so that its
+    relation (:func:`p_relation`) stays "≈": a computed 95.999 % is "95.9", never "95"
+    (which would read "p = 95 %", a chosen probability).
+
+    >>> p_text(0.95999), p_text(0.9545001), p_text(0.9587), p_relation(p_text(0.95999))
+    ('95.9', '95.4', '95.8', '≈')
     """
     if p is None or not math.isfinite(float(p)):
         return None
@@ -332,13 +339,22 @@ def p_text(p: float | None) -> str | None:
         chosen = Decimal(repr(float(p))).scaleb(2)
     if 0 < chosen < 100 and chosen.as_tuple().exponent >= -2:
         s = f"{chosen:f}"
-        return s.rstrip("0").rstrip(".") if "." in s else s
+        s = s.rstrip("0").rstrip(".") if "." in s else s
+        if s in CHOSEN_P_TEXTS or "." not in s:
+            return s                # chosen (95, 95.45, 99.73), or a whole per cent
     v = 100.0 * float(p)
     d = max(decimals_for_sig(v, 2), 0)
     while v < 100.0 and d < P_TEXT_MAX_DECIMALS and float(round_half_up(v, d)) >= 100.0:
         d += 1                      # the digits that show it below 100
-    s = round_half_up(v, d) if v >= 100.0 else round_half_up(v, d, rounding=ROUND_FLOOR)
-    return s.rstrip("0").rstrip(".") if "." in s else s
+
+    def at(d: int) -> str:
+        s = round_half_up(v, d) if v >= 100.0 else round_half_up(v, d, rounding=ROUND_FLOOR)
+        return s.rstrip("0").rstrip(".") if "." in s else s
+    s = at(d)
+    while s in CHOSEN_P_TEXTS and d < P_TEXT_MAX_DECIMALS:
+        d += 1                      # a computed p is never printed as a chosen one
+        s = at(d)
+    return s
 
 
 #: results.json unit → its printed SI form (degree, hour, second of arc: accepted for use with
