@@ -878,12 +878,12 @@ def table_calibration_file(store, cal_id: int, work: Path) -> Path | None:
 #                                                                            table calibrations
 
 
-def _readable_table_calibration(store, sha256: str, shown: str) -> None:
+def _readable_table_calibration(store, sha256: str, shown: str) -> str:
     """The stored file ``sha256`` read as a table calibration by the reader of every
     specification that reads one (``Specification.read_table_calibration``): a file no
     reader takes (not UTF-8, a NUL byte, a formula in a number's place, a missing column) is
     refused in one line naming the file by ``shown``, its line and column, before it is
-    registered."""
+    registered. Returns what the readers read (:func:`table_content`)."""
     from gonio import specs
 
     readers = [sp.read_table_calibration for sp in specs.available().values()
@@ -891,13 +891,67 @@ def _readable_table_calibration(store, sha256: str, shown: str) -> None:
     if not readers:
         raise GonioError("no specification reads a table calibration", key="sha256")
     path = blobs.blob_path(store.blob_root, sha256)
+    read_as = []
     for read in readers:
         try:
-            read(path)
+            read_as.append(read(path))
         except GonioError as exc:
             raise GonioError(f"not a table calibration: {exc.message}",
                              file=shown or TABLE_CALIBRATION, line=exc.line,
                              column=exc.column) from None
+    return table_content(read_as)
+
+
+#: Fields of a read table calibration that say where it was read from, not what it states
+#: (:func:`table_content` leaves them out).
+TABLE_CONTENT_NOT_STATED = frozenset({"sha256", "lines", "source"})
+
+
+def table_content(read_as) -> str:
+    """The SHA-256 of what a table calibration file states, as its readers read it: every
+    field of each reader's object (a dataclass: positions, errors, uncertainties,
+    covariance, degrees of freedom…) but where it was read from
+    (:data:`TABLE_CONTENT_NOT_STATED`), numbers as float64 bytes. Two files that differ
+    only in their bytes (a line ending, a trailing blank, a comment, "0.10" for "0.1") have
+    one content: a withdrawn entry's content is not registered again under other bytes
+    (:func:`_refuse_withdrawn_bytes`).
+
+    >>> from dataclasses import dataclass
+    >>> import numpy as np
+    >>> @dataclass
+    ... class T:
+    ...     table_deg: np.ndarray
+    ...     source: str
+    >>> a = table_content([T(np.array([0.0, 90.0]), "a.csv")])
+    >>> a == table_content([T(np.array([0.0, 90.00]), "b.csv")])
+    True
+    >>> a == table_content([T(np.array([0.0, 90.1]), "a.csv")])
+    False
+    """
+    import dataclasses
+    import hashlib
+
+    import numpy as np
+
+    h = hashlib.sha256()
+    for obj in read_as:
+        fs = dataclasses.fields(obj) if dataclasses.is_dataclass(obj) else ()
+        for f in fs:
+            if f.name in TABLE_CONTENT_NOT_STATED:
+                continue
+            v = getattr(obj, f.name)
+            h.update(f.name.encode())
+            if v is None:
+                h.update(b"\0none")
+            elif isinstance(v, (np.ndarray, list, tuple, int, float)) and not isinstance(
+                    v, bool):
+                try:
+                    h.update(np.asarray(v, dtype=float).tobytes())
+                except (TypeError, ValueError):
+                    h.update(repr(v).encode())
+            else:
+                h.update(repr(v).encode())
+    return h.hexdigest()
 
 
 def add_months(day: _dt.date, months: int) -> _dt.date:
@@ -990,21 +1044,42 @@ def _governed(s: Session, st: Standard, start: _dt.date, sha256: str,
     return None
 
 
-def _refuse_withdrawn_bytes(s: Session, sha256: str) -> None:
-    """Refuse to register ``sha256`` where the register holds it as a withdrawn entry (of
-    any table): a withdrawal is asked by one person and approved by another, so one person
-    registering the same bytes again would undo it alone. Only a new file (another SHA-256)
-    takes a withdrawn entry's place (docs/records.md, the register: withdrawn)."""
-    entries = s.scalars(select(TableCalibration).where(TableCalibration.sha256 == sha256)
-                        .order_by(TableCalibration.id)).all()
+def _refuse_withdrawn_bytes(s: Session, store, sha256: str, content: str, *,
+                            standard_id: int, valid_from: _dt.date, due_on: _dt.date,
+                            certificate: str) -> None:
+    """Refuse to register what the register holds as a withdrawn entry (of any table): a
+    withdrawal is asked by one person and approved by another, so one person registering the
+    same again would undo it alone. Refused: the same bytes (``sha256``), whatever else is
+    stated; and a file that states the same numbers (``content``, :func:`table_content`: a
+    line ending, a blank or a comment changed) registered for the same table, valid from the
+    same day, due the same day under the same certificate identifier, i.e. a registration
+    that corrects nothing. A correction takes the withdrawn entry's place: other numbers, or
+    the same numbers under corrected dates or identifier (docs/records.md, the register:
+    withdrawn)."""
+    entries = s.scalars(select(TableCalibration).order_by(TableCalibration.id)).all()
     gone = withdrawals(s, [e.id for e in entries])
     for e in entries:
-        if e.id in gone:
-            raise GonioError(f"this file (SHA-256 {sha256[:16]}…) is table calibration "
-                             f"{e.id} ({e.certificate or e.name}), "
-                             f"withdrawn on {gone[e.id].withdrawn_at:%Y-%m-%d %H:%M} UTC: "
-                             "a withdrawn entry's bytes are not registered again (register "
-                             "the corrected file)", key="sha256")
+        if e.id not in gone:
+            continue
+        if e.sha256 == sha256:
+            what = "bytes are"
+        elif ((e.standard_id, e.valid_from, e.due_on, e.certificate or "")
+              == (standard_id, valid_from, due_on, certificate or "")):
+            try:
+                same = _readable_table_calibration(store, e.sha256, e.name) == content
+            except GonioError:
+                same = False            # a withdrawn file no reader takes now: not this one
+            if not same:
+                continue
+            what = ("numbers (as read), table, dates and certificate are, with other bytes "
+                    "only,")
+        else:
+            continue
+        raise GonioError(f"this file (SHA-256 {sha256[:16]}…) is table calibration "
+                         f"{e.id} ({e.certificate or e.name}), "
+                         f"withdrawn on {gone[e.id].withdrawn_at:%Y-%m-%d %H:%M} UTC: "
+                         f"a withdrawn entry's {what} not registered again "
+                         "(register the corrected file)", key="sha256")
 
 
 def register_table_calibration(store, actor: User, *, standard_id: int, sha256: str,
@@ -1045,11 +1120,12 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
                              key="standard")
         if s.get(Blob, sha256) is None:
             raise GonioError("no such stored file", key="sha256")
-        _readable_table_calibration(store, sha256, shown)
+        content = _readable_table_calibration(store, sha256, shown)
         others = s.scalars(select(TableCalibration).where(
             TableCalibration.standard_id == st.id)).all()
         withdrawn = withdrawals(s, [o.id for o in others])
-        _refuse_withdrawn_bytes(s, sha256)
+        _refuse_withdrawn_bytes(s, store, sha256, content, standard_id=st.id,
+                                valid_from=start, due_on=due, certificate=cert)
         for other in others:
             if other.id in withdrawn:
                 continue

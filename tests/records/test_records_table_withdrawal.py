@@ -35,7 +35,11 @@ from .test_records_table_register import (FILES, SHA, VALID, create, in_force_he
 
 
 #: the corrected file registered in a withdrawn TC-2's place: its own bytes (another SHA-256)
-CORRECTED = FILES["TC-2"].replace(b"TC-2\n", b"TC-2 (corrected issue)\n")
+#: and a corrected number (a file with the withdrawn numbers, dates and certificate corrects
+#: nothing: test_withdrawn_numbers_under_other_bytes_are_refused)
+CORRECTED = FILES["TC-2"].replace(b"TC-2\n", b"TC-2 (corrected issue)\n").replace(
+    b"120,0.020,", b"120,0.021,")
+assert CORRECTED.count(b"0.021") == 1
 
 
 def reg(store, actor, table_id, key, start, due, name=None, content=None):
@@ -470,3 +474,31 @@ def test_backup_restore_keeps_the_withdrawal(store, tmp_path):
         assert rows[ids["TC-2"]]["affected"] == [used.id] and rows[ids["TC-1"]]["state"] == ""
     finally:
         target.close()
+
+
+def test_withdrawn_numbers_under_other_bytes_are_refused(store):
+    """One person cannot undo a two-person withdrawal by registering the withdrawn file again
+    with a byte added, CRLF line endings, a comment changed or a number written with another
+    zero: the numbers as read, the table, the dates and the certificate are those of the
+    withdrawn entry, so it is refused in one line naming it; the same numbers under a
+    corrected due date are a correction and are registered."""
+    people, _, table_id, _ = setup_lab(store)
+    tech, rev, rev2 = people["tech"], people["rev"], people["rev2"]
+    tc = register(store, tech, table_id, "TC-1")
+    services.ask_withdrawal(store, rev, tc.id, "wrong file")
+    services.approve_withdrawal(store, rev2, tc.id)
+    raw = FILES["TC-1"]
+    for variant in (raw + b"\n", raw.replace(b"\n", b"\r\n"),
+                    raw.replace(b"# table certificate TC-1", b"# table certificate TC-1 again"),
+                    raw.replace(b"0,0.0,0.02", b"0,0.00,0.020")):
+        assert variant != raw
+        with pytest.raises(GonioError) as e:
+            reg(store, tech, table_id, "TC-1", *VALID["TC-1"], content=variant)
+        msg = one_line(e)
+        assert (f"is table calibration {tc.id} (TC-1), withdrawn on " in msg
+                and "numbers (as read), table, dates and certificate" in msg), msg
+    assert len(services.table_calibrations(store)) == 1
+    # the same numbers, the due date corrected: registered (a correction of the entry)
+    again = reg(store, tech, table_id, "TC-1", VALID["TC-1"][0], "2025-12-31",
+                content=raw + b"\n")
+    assert again.id != tc.id and len(services.table_calibrations(store)) == 2
