@@ -69,6 +69,9 @@ META_RANGES: dict[str, tuple[float, float, str]] = {
     "null_output": (-1e12, 1e12, "a number in [-1e12, 1e12]"),
     "latitude_deg": (-90.0, 90.0, "a number in [-90, 90]"),
     "room_temperature_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    # the environment stated on the certificate (identity compares it with the lab file)
+    "temperature_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    "humidity_pct": (0.0, 100.0, "a relative humidity in [0, 100] %"),
     "supply_nominal_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
     "rate_table_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
     "rate_table_ripple_rel": (0.0, 0.5, "a relative ripple amplitude in [0, 0.5]"),

@@ -152,11 +152,22 @@ def condition_text(v) -> str:
     "20.0" states its resolution), or the laboratory file's number to at most 6 significant
     digits (the certificate's text; the DCC writes the same digits).
 
+    A number text in exponent form or with a sign "+" (a valid number, not a logger's
+    digits) is stated plainly, as a laboratory file's number is.
+
     >>> condition_text(20.1), condition_text(45.0), condition_text("22.50"), condition_text(20)
     ('20.1', '45', '22.50', '20')
+    >>> condition_text("2e1"), condition_text("+21.5"), condition_text("2.05E1")
+    ('20', '21.5', '20.5')
     """
     if isinstance(v, str):
-        return v.strip()
+        t = v.strip()
+        if not any(c in t for c in "eE+"):
+            return t
+        try:
+            return f"{float(t):g}"
+        except ValueError:
+            return t
     return f"{float(v):g}"
 
 

@@ -52,6 +52,11 @@ _OPTIONAL_FLOATS = ("chamber_c", "sensor_c", "supply_v") + SD
 #: metadata keys that must be numbers, with their check
 NUMERIC_METADATA = {"latitude_deg": (lambda v: -90 <= v <= 90, "a number in [-90, 90]"),
                     "sample_rate_hz": (lambda v: v > 0, "a number > 0")}
+#: the environment the certificate states, where the readings give it (checked when present)
+ENVIRONMENT_METADATA = {
+    "temperature_c": (lambda v: -100 <= v <= 200, "a temperature in [-100, 200] °C"),
+    "room_temperature_c": (lambda v: -100 <= v <= 200, "a temperature in [-100, 200] °C"),
+    "humidity_pct": (lambda v: 0 <= v <= 100, "a relative humidity in [0, 100] %")}
 #: optional metadata: the rate table's certificate and the fixture's bound (the alignment's
 #: Type B terms, :func:`gonio.specs.triad_alignment.analysis.table_type_b_cov`), with the
 #: value taken when a file does not state it — the rate-gyro specifications' table
@@ -143,6 +148,9 @@ def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReading
     for k, (ok, expect) in NUMERIC_METADATA.items():
         _check_number(meta, k, ok, expect, file)
     for k, (_, ok, expect) in TABLE_METADATA.items():
+        if str(meta.get(k, "")).strip():
+            _check_number(meta, k, ok, expect, file)
+    for k, (ok, expect) in ENVIRONMENT_METADATA.items():
         if str(meta.get(k, "")).strip():
             _check_number(meta, k, ok, expect, file)
     header_line = i + 1
