@@ -227,7 +227,10 @@ class ItemCoverage:
     stated by its one-sided χ² interval alone (a standard deviation: no k), the truth inside
     that interval and z its χ² z (:func:`chi_square_z`), with z on u_c kept beside it
     (``z_uc_mean``, ``z_uc_sd``, ``max_norm_error_uc``); ``"interval"``: stated by another
-    interval (a range, a rule's outcome range), the truth inside it, z on u_c; ``"mixed"``:
+    interval (a range, a rule's outcome range), the truth inside it, z on u_c; ``"level"``:
+    an interval inverted from its estimator's distribution whose item gives its level table
+    (:func:`level_z_at`), the truth inside it and z that interval's own level at the
+    truth, z on u_c beside it; ``"mixed"``:
     trials of both kinds. ``p_stated``: the mean coverage probability the trials' intervals
     state (an outcome range states its own, above 95 %): coverage is judged against it
     (flag ``below its p`` where the Clopper–Pearson upper end is under it); for a
@@ -264,11 +267,34 @@ def _trial_judged(v: float, t: float, U: float, u: float, stated: dict | None):
     if iv is None:
         return abs(v - t) <= U, z_uc, z_uc, ne, "u_c"
     hit = iv[0] <= t <= iv[1]
+    zl = stated.get("z_level")
+    if zl is not None and math.isfinite(zl):
+        return hit, float(zl), z_uc, abs(float(zl)), "level"
     nu = stated.get("nu")
     if nu and t > 0:
         z = float(chi_square_z(v, t, nu))
         return hit, z, z_uc, abs(z), "chi-square"
     return hit, z_uc, z_uc, ne, "interval"
+
+
+def level_z_at(grid: dict | None, truth: float) -> float | None:
+    """The level z of an interval statement at the truth, from the item's table of it
+    (``{"value": [θ_i ascending], "z": [z_i]}``, the ``level_z_grid`` of an item's details:
+    Φ⁻¹ of the probability integral transform of θ in the distribution the interval was
+    inverted from, or the signed level of the smallest interval of its family holding θ),
+    by linear interpolation; outside the table the end value; None without a table.
+
+    >>> level_z_at({"value": [0.0, 1.0, 2.0], "z": [2.0, 0.0, -2.0]}, 1.5)
+    -1.0
+    >>> level_z_at({"value": [0.0, 1.0], "z": [2.0, 0.0]}, 5.0), level_z_at(None, 1.0)
+    (0.0, None)
+    """
+    if not grid or truth is None or not math.isfinite(truth):
+        return None
+    x, z = np.asarray(grid["value"], float), np.asarray(grid["z"], float)
+    if x.size < 2 or np.any(np.diff(x) <= 0):
+        raise GonioError("a level table needs at least two ascending values")
+    return float(np.interp(truth, x, z))
 
 
 def _spread(z) -> tuple[float | None, float | None]:
@@ -363,12 +389,16 @@ def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None
             if r["value"] is not None:
                 recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
                 stated.setdefault(key, []).append(
-                    {"interval": r["interval"], "nu": r.get("nu"), "p": r.get("p")}
+                    {"interval": r["interval"], "nu": r.get("nu"), "p": r.get("p"),
+                     "z_level": r.get("z_level")}
                     if r.get("interval")
                     else None)
     rows = [item_coverage(v, k, clauses[k], stated[k], judge_spread).__dict__
             for k, v in recs.items()]
     return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
+
+
+_STAT_LABEL = {"chi-square": "chi2 z", "level": "level z"}
 
 
 def format_coverage(df, title: str) -> str:
@@ -383,7 +413,7 @@ def format_coverage(df, title: str) -> str:
         ps = getattr(r, "p_stated", None)
         p_txt = "" if ps is None or ps != ps else f", stated p {ps:.3f}"
         on_uc = "" if st in ("u_c", None) or st != st else (
-            f"  [{'chi2 z' if st == 'chi-square' else st}{p_txt}; z on u_c: mean "
+            f"  [{_STAT_LABEL.get(st, st)}{p_txt}; z on u_c: mean "
             f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
         lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
                      f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
@@ -392,7 +422,10 @@ def format_coverage(df, title: str) -> str:
                  "the stated interval for an item stated by its interval alone (95 % "
                  "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
                  "deviation stated by its chi-square interval [chi2 z] Phi^-1(F_chi2(nu "
-                 "value^2/truth^2; nu)) with z on u_c beside it; flagged: coverage < 90 % "
+                 "value^2/truth^2; nu)) with z on u_c beside it, or for an interval "
+                 "inverted from the estimator's distribution [level z] the interval's own "
+                 "level at the truth (Phi^-1 of the truth's probability integral transform); "
+                 "flagged: coverage < 90 % "
                  "(under-covers), sd z < 0.3 (over-wide U), the Clopper-Pearson upper end "
                  "below the mean probability the intervals state (below its p)")
     return "\n".join(lines) + "\n"

@@ -27,7 +27,8 @@ from pathlib import Path
 import pandas as pd
 
 from gonio.analysis.coverage import (ItemCoverage, coverage_table_from, format_coverage,
-                                     item_coverage, spawn_seed, stated_record, wilson_interval)
+                                     item_coverage, level_z_at, spawn_seed, stated_record,
+                                     wilson_interval)
 from gonio.atomic import write_text
 from gonio.errors import GonioError
 from gonio.pipeline.dispatch import screen_and_calibrate
@@ -141,9 +142,21 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
         out[key] = {"clause": it.clause,
                     **({"value": float(it.value), "truth": float(t),
                         "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
-                        **stated_record(it.uncertainty)}
+                        **stated_record(it.uncertainty),
+                        **_level_record(it, float(t) if ok else None)}
                        if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
     return out
+
+
+def _level_record(it, truth) -> dict:
+    """{"z_level": the interval's level z at the truth} for an item stated by an interval
+    whose details give its level table (``level_z_grid``,
+    :func:`gonio.analysis.coverage.level_z_at`); {} otherwise."""
+    u = it.uncertainty
+    if u is None or u.k is not None or u.interval is None:
+        return {}
+    z = level_z_at((it.details or {}).get("level_z_grid"), truth)
+    return {} if z is None else {"z_level": z}
 
 
 def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,

@@ -23,12 +23,16 @@ Contents
 :func:`normal_range_mean`       d_n = E[R/σ] of n normal values
 :func:`half_range_upper`        IEC 5.3.3.4: one-sided upper limit of the expected half range
 :func:`max_abs_normal_mean`     c_n = E[max |Z_i|] (5.3.3.7's selection excess; shared, re-exported)
+:func:`hysteresis_level_iec`    IEC 5.3.3.7: the reading's least-favourable distribution G(M; h)
 :func:`hysteresis_upper_iec`    IEC 5.3.3.7: one-sided upper limit of the largest true |B_up − B_down|
+:func:`hysteresis_level_grid`   IEC 5.3.3.7: the statement's level z on a grid (for a study)
 :func:`walk_coefficient_bound`  IEC 5.1.3, 5.3.3: the largest K² the static record allows
 :func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (posterior mean)
 :func:`max_spread_moments`      IEC 5.1.3.7: E and sd of max δ_i, δ_i independent scaled χ
 :func:`max_spread_estimate`     IEC 5.1.3.7: max σ_i from max δ_i, the maximum's bias removed
 :func:`max_spread_bounds`       IEC 5.1.3.7: bounds of max σ_i, any record lengths
+:func:`max_spread_level_z`      IEC 5.1.3.7: the level z of those bounds at a given max σ_i
+:func:`max_spread_level_grid`   IEC 5.1.3.7: that level z on a grid (for a study)
 ==============================  ==================================================
 """
 
@@ -307,38 +311,110 @@ def half_range_upper(half_range: float, n: int, p: float = 0.95) -> float:
 
 # --------------------------------------------------------------------------- 5.3.3.6, 5.3.3.7
 
+def hysteresis_level_iec(reading: float, sds, h) -> np.ndarray:
+    """IEC 62047-20 5.3.3.7, the reading's distribution the statement is inverted from:
+    G(M; h) = the largest probability P(max_T |D_T| ≤ M) any set of true differences
+    whose largest |δ_T| is h gives, with D_T ~ N(δ_T, σ_T²) independent (``sds`` the σ_T):
+    P(max_T |D_T| ≤ M) = Π_T F(M; δ_T, σ_T), F the folded normal
+    Φ((M − δ)/σ) − Φ((−M − δ)/σ), each factor largest at δ_T = 0, so the least favourable
+    set puts h on one temperature j and 0 on the others:
+    G(M; h) = max_j F(M; h, σ_j)·Π_(T≠j) F(M; 0, σ_T). With every true difference 0 (h = 0,
+    the study bench's chamber without lag) it is the exact distribution function of the
+    reading, so G(M; H) of the truth H is uniform: its Φ⁻¹ is the statement's own level z
+    (the probability integral transform). A σ of 0: that difference is exact (its factor
+    the indicator |δ| ≤ M). ``h``: one value or an array; returns G at each.
+
+    >>> from scipy.stats import norm
+    >>> g = hysteresis_level_iec(1.0, [1.0, 2.0], [0.0, 0.5])
+    >>> F = lambda m, d, s: norm.cdf((m - d) / s) - norm.cdf((-m - d) / s)
+    >>> round(float(g[0]), 12) == round(float(F(1, 0, 1) * F(1, 0, 2)), 12)
+    True
+    >>> round(float(g[1]), 12) == round(float(max(F(1, .5, 1) * F(1, 0, 2),
+    ...                                            F(1, .5, 2) * F(1, 0, 1))), 12)
+    True
+    """
+    from scipy.stats import norm
+
+    m, s = float(reading), as_array(sds, "sds")
+    hh = np.atleast_1d(np.asarray(h, dtype=float))
+    if not (m >= 0.0 and np.all(s >= 0.0) and s.size and np.all(hh >= 0.0)):
+        raise GonioError(f"5.3.3.7: reading {reading!r}: needs reading ≥ 0, standard "
+                         "deviations ≥ 0 and h ≥ 0")
+
+    def fold(d, sj):
+        if sj == 0.0:
+            return (np.abs(d) <= m).astype(float)
+        return norm.cdf((m - d) / sj) - norm.cdf((-m - d) / sj)
+
+    f0 = np.array([float(fold(np.zeros(1), float(sj))[0]) for sj in s])
+    out = np.zeros_like(hh)
+    for j, sj in enumerate(s):
+        rest = float(np.prod(np.delete(f0, j)))
+        out = np.maximum(out, fold(hh, float(sj)) * rest)
+    return out
+
+
 def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
     """IEC 62047-20 5.3.3.7, the statement: the one-sided ``p`` upper confidence limit of the
     true hysteresis H = max_T |δ_T| (δ_T the true B_up − B_down at temperature T) from the
     reading M = max_T |D_T| (:func:`hysteresis_iec`), each difference D_T ~ N(δ_T, σ_T²)
-    with ``sds`` the σ_T. The test of H = h is inverted on the temperature j that holds the
-    largest true difference: P(M ≤ m) ≤ P(|D_j| ≤ m) = F(m; h, σ_j), the folded normal
-    Φ((m − h)/σ_j) − Φ((−m − h)/σ_j), whatever the other differences and their correlation
-    (the visits share the session's drift), so h_j = sup{h ≥ 0 : F(M; h, σ_j) ≥ 1 − p}
-    holds H with probability ≥ p; j is not known, so the limit is max_j h_j, and never
-    below the reading M. With every true difference 0 (a chamber without lag: the truth is
-    the bound of the measurand) M's own spread sets the limit, about M + 1.6σ.
+    with ``sds`` the σ_T, by inverting the test of H = h on the reading's distribution
+    (:func:`hysteresis_level_iec`): h_p = sup{h ≥ 0 : G(M; h) ≥ 1 − p}, G the largest
+    P(max |D_T| ≤ M) a set of true differences with max |δ_T| = h gives (h on one
+    temperature, 0 on the others: the product over the other temperatures' folded normals
+    at 0 is part of it). It holds H with probability ≥ p for any true differences, exactly
+    p where every true difference is 0 (independent differences). Where even h = 0 makes
+    the reading improbably small (G(M; 0) < 1 − p: the exact test's empty set), the limit is
+    the reading M itself: never below M (the truth 0 is then held too, so the coverage
+    at H = 0 exceeds p by that probability; the level z of the study is G's, not this
+    floor's). Before 1 Dec 2026 G left the other temperatures' factors out (a bound ≤ 1 on
+    each), which made the interval over-wide at H = 0 (study z sd 0.55).
 
     >>> from scipy.stats import norm
     >>> h = hysteresis_upper_iec(1.0, [1.0])
     >>> round(h, 4), round(float(norm.cdf(1.0 - h) - norm.cdf(-1.0 - h)), 9)   # F(M; h, σ) = 5 %
     (2.6436, 0.05)
+    >>> h = hysteresis_upper_iec(2.0, [1.0, 1.0])           # two temperatures: × F(M; 0, σ)
+    >>> f0 = norm.cdf(2.0) - norm.cdf(-2.0)
+    >>> round(float((norm.cdf(2.0 - h) - norm.cdf(-2.0 - h)) * f0), 9)
+    0.05
     >>> hysteresis_upper_iec(0.0, [0.0, 0.0])        # noise-free: the reading itself
     0.0
     """
-    from scipy import optimize, stats
+    from scipy import optimize
 
     m, s = float(reading), as_array(sds, "sds")
     if not (m >= 0.0 and 0.0 < p < 1.0 and np.all(s >= 0.0)):
         raise GonioError(f"5.3.3.7: reading {reading!r}, p {p!r}: needs reading ≥ 0, 0 < p < 1 "
                          "and standard deviations ≥ 0")
     q, hi = 1.0 - p, m
-    for sj in s[s > 0.0]:
-        def f(h, sj=float(sj)):
-            return stats.norm.cdf((m - h) / sj) - stats.norm.cdf((-m - h) / sj) - q
-        if f(0.0) > 0.0:
-            hi = max(hi, optimize.brentq(f, 0.0, m + 12.0 * sj, xtol=1e-14 * (m + sj)))
+    if not np.any(s > 0.0):
+        return float(hi)
+
+    def f(h):
+        return float(hysteresis_level_iec(m, s, h)[0]) - q
+    if f(0.0) > 0.0:
+        top = m + 12.0 * float(s.max())
+        hi = max(hi, optimize.brentq(f, 0.0, top, xtol=1e-14 * (m + float(s.max()))))
     return float(hi)
+
+
+def hysteresis_level_grid(reading: float, sds, upper: float, n: int = 81) -> dict:
+    """IEC 62047-20 5.3.3.7, the statement's level as a table for a coverage study (which
+    knows the truth, the item does not): ``{"value": h_i, "z": Φ⁻¹(G(M; h_i))}`` on n
+    points from 0 to twice the upper limit ``upper`` (:func:`hysteresis_level_iec`; z held
+    within ±8). A study reads z at the truth by linear interpolation
+    (:func:`gonio.analysis.coverage.level_z_at`).
+
+    >>> g = hysteresis_level_grid(1.0, [1.0], hysteresis_upper_iec(1.0, [1.0]))
+    >>> round(float(np.interp(hysteresis_upper_iec(1.0, [1.0]), g["value"], g["z"])), 2)
+    -1.64
+    """
+    from scipy.stats import norm
+
+    hs = np.linspace(0.0, 2.0 * max(float(upper), float(reading), 1e-300), int(n))
+    z = np.clip(norm.ppf(hysteresis_level_iec(reading, sds, hs)), -8.0, 8.0)
+    return {"value": [float(v) for v in hs], "z": [float(v) for v in z]}
 
 
 def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
@@ -504,14 +580,13 @@ def max_spread_estimate(spreads, dofs, p: float = 0.95, noise: bool = True) -> d
     Returns ``value`` = max δ_i − B_mid; ``u_c`` = √(sd(δ_top)² + u_B²) (sd of the largest
     spread's own scaled χ: where the true spreads differ, the maximum's distribution at the
     measured spreads, narrower where they look alike, would understate); the 95 %
-    ``interval`` of max σ_i (its upper end and a floor under its lower end from
-    :func:`max_spread_bounds`, which hold for any record lengths): δ_top − S = σ_top·√(χ²_ν/ν) for a selection excess S (beyond
-    Jensen's) in [0, S_max], S_max = B_max − B_min, so the exact χ² interval of σ_top
-    (JCGM 101 7.7 for a scaled χ; the one of :func:`gonio.result.gum.std_dev_uncertainty`,
-    two-sided here) of every δ_top − S, united: [(δ_top − S_max)·√(ν/χ²_{ν,(1+p)/2}),
-    δ_top·√(ν/χ²_{ν,(1−p)/2})] (coverage at least p when S lies in its range: 0.955–0.98
-    on 1500 Monte Carlo records each of σ (1, 1), (1, 0.8), (1, 0.95), (1, 1, 1) at
-    ν 49 and 299, where a pivot about the corrected value covered 0.89 at (1, 0.8), ν 49);
+    ``interval`` of max σ_i, the test inversion of the spreads' own distribution,
+    :func:`max_spread_bounds` (each end at its least favourable true spreads: the lower at
+    every spread equal to max σ_i, the upper at one spread alone; at least p for any true
+    spreads and record lengths; the value held inside it). Until 1 Dec 2026 the lower end
+    was the lower of that and the χ² interval of every δ_top − S united over the selection
+    excess S in [0, S_max]: 0.955–0.98 on Monte Carlo records, but over-wide in the study
+    (its level z sd 0.56–0.61 on 40 trials), the union counting the excess twice;
     ``reading`` (max δ_i, the standard's), ``bias`` B_mid, ``bias_bounds``, ``contenders``
     and ``sd_max``. ``noise`` False (a bench without noise: the spreads are exact): no
     correction.
@@ -545,11 +620,10 @@ def max_spread_estimate(spreads, dofs, p: float = 0.95, noise: bool = True) -> d
     from scipy import stats
 
     e, sd = max_spread_moments([top], [nu[i]])
-    lo = (top - (b_hi - b_lo)) * math.sqrt(nu[i] / stats.chi2.ppf((1 + p) / 2, nu[i]))
-    lo_all, hi = max_spread_bounds(s, nu, p)
-    return {"value": value, "u_c": math.sqrt(sd * sd + u_b * u_b), "sd_max": sd, "u_bias": u_b,
-            "interval": (max(min(lo, lo_all), 0.0), hi), "reading": top, "bias": b_mid,
-            "bias_bounds": (b_lo, b_hi), "contenders": m}
+    lo, hi = max_spread_bounds(s, nu, p)
+    return {"value": min(max(value, lo), hi), "u_c": math.sqrt(sd * sd + u_b * u_b),
+            "sd_max": sd, "u_bias": u_b, "interval": (max(lo, 0.0), hi), "reading": top,
+            "bias": b_mid, "bias_bounds": (b_lo, b_hi), "contenders": m}
 
 
 def max_spread_bounds(spreads, dofs, p: float = 0.95) -> tuple[float, float]:
@@ -571,8 +645,8 @@ def max_spread_bounds(spreads, dofs, p: float = 0.95) -> tuple[float, float]:
       1 − (1 − p)/2, and then their maximum is below max σ_i.
 
     Coverage ≥ p for every σ and ν (proved above; checked by Monte Carlo in
-    tests/test_iec_estimator_bias.py). :func:`max_spread_estimate` states the lower of this
-    lower end and its own (the selection excess's), and this upper end.
+    tests/test_iec_estimator_bias.py). :func:`max_spread_estimate` states this interval;
+    :func:`max_spread_level_z` is its level at a given max σ_i.
 
     >>> lo, hi = max_spread_bounds([1.0, 1.9], [299, 4])
     >>> round(hi, 3) == round(1.9 * math.sqrt(4 / __import__("scipy").stats.chi2.ppf(0.025, 4)), 3)
@@ -589,3 +663,54 @@ def max_spread_bounds(spreads, dofs, p: float = 0.95) -> tuple[float, float]:
     lo = float(np.max(s * np.sqrt(nu / stats.chi2.ppf(1.0 - a, nu))))
     hi = float(np.max(s * np.sqrt(nu / stats.chi2.ppf((1.0 - p) / 2, nu))))
     return lo, hi
+
+
+def max_spread_level_z(spreads, dofs, sigma) -> np.ndarray:
+    """IEC 62047-20 5.1.3.7, the level of :func:`max_spread_bounds`' interval at a true
+    largest spread ``sigma`` (one value or an array): with Q = max_i F_ν_i(ν_i δ_i²/σ²)
+    (F the χ² distribution function), σ lies above the level-p lower end iff
+    Q^n < (1 + p)/2 and below the upper end iff Q ≥ (1 − p)/2, so the smallest interval of
+    the family holding σ has p* = max(2Q^n − 1, 1 − 2Q, 0) and the signed level z is
+    Φ⁻¹(Q^n) where Q^n > ½ (the reading high), Φ⁻¹(Q) where Q < ½ (low), 0 between (σ
+    inside every level's interval). Where every true spread equals σ, Q^n is uniform: z
+    above 0 is then N(0, 1) exactly; below 0 it is Φ⁻¹ of Q, whose tail the upper end's
+    one-spread-alone case makes conservative. Held within ±8.
+
+    >>> from scipy.stats import norm
+    >>> lo, hi = max_spread_bounds([1.0, 0.9], [99, 99])
+    >>> [round(float(v), 3) for v in max_spread_level_z([1.0, 0.9], [99, 99], [lo, hi])]
+    [1.96, -1.96]
+    >>> q = [0.6 ** 0.5, 0.45]                     # two equal spreads: Q between ½ and ½^(1/2)
+    >>> sg = [(99 / __import__("scipy").stats.chi2.ppf(v, 99)) ** 0.5 for v in q]
+    >>> [round(float(v), 6) for v in max_spread_level_z([1.0, 1.0], [99, 99], sg)]
+    [0.253347, -0.125661]
+    >>> round(float(norm.ppf(0.6)), 6), round(float(norm.ppf(0.45)), 6)
+    (0.253347, -0.125661)
+    """
+    from scipy import stats
+
+    s, nu = as_array(spreads, "spreads"), as_array(dofs, "dofs")
+    sg = np.atleast_1d(np.asarray(sigma, dtype=float))
+    if s.shape != nu.shape or s.size == 0 or not np.all(sg > 0.0):
+        raise GonioError(f"max spread level: {s.size} spreads, {nu.size} dofs, σ > 0 needed")
+    q = np.max(stats.chi2.cdf(nu[None, :] * s[None, :] ** 2 / sg[:, None] ** 2, nu[None, :]),
+               axis=1)
+    qn = q ** s.size
+    z = np.where(qn > 0.5, stats.norm.ppf(qn), np.where(q < 0.5, stats.norm.ppf(q), 0.0))
+    return np.clip(z, -8.0, 8.0)
+
+
+def max_spread_level_grid(spreads, dofs, interval, n: int = 81) -> dict:
+    """IEC 62047-20 5.1.3.7, :func:`max_spread_level_z` as a table for a coverage study:
+    ``{"value": σ_i, "z": z_i}`` on n points from half the interval's lower end to twice
+    its upper end (a study reads z at the truth by linear interpolation,
+    :func:`gonio.analysis.coverage.level_z_at`).
+
+    >>> g = max_spread_level_grid([1.0], [99], max_spread_bounds([1.0], [99]))
+    >>> len(g["value"]), g["z"][0] > 1.96 > -1.96 > g["z"][-1]
+    (81, True)
+    """
+    lo, hi = float(interval[0]), float(interval[1])
+    vs = np.linspace(max(0.5 * lo, 1e-12 * hi), 2.0 * hi, int(n))
+    z = max_spread_level_z(spreads, dofs, vs)
+    return {"value": [float(v) for v in vs], "z": [float(v) for v in z]}

@@ -504,9 +504,10 @@ def sf_stability(ctx: Context) -> Item:
     bias's range between Jensen's alone (one rate's spread stands clear) and the full
     selection excess of the contending rates (they share the largest), that range
     rectangular in the budget (the correction's own uncertainty) — and stated by its ONE
-    95 % interval (no k, no ν): the χ² interval of the largest spread united over the
-    range of the selection excess. u_c: the largest spread's own sampling spread and the
-    correction's. A noise-free bench (static record without variation): no correction."""
+    95 % interval (no k, no ν): the test inversion of the spreads' own scaled-χ
+    distribution (:func:`gonio.specs.iec62047_20.formulas.max_spread_bounds`; its level at
+    a given max σ_i, ``level_z_grid`` in the details, is what a study judges). u_c: the
+    largest spread's own sampling spread and the correction's. A noise-free bench (static record without variation): no correction."""
     t, cl, un = "scale-factor stability (max σ_i)", "5.1.3.7", "1"
     m = _miss(ctx, "scale_factor", "sf_stability", t, cl, un)
     if m:
@@ -544,6 +545,10 @@ def sf_stability(ctx: Context) -> Item:
                 interval=(lo, hi))
     return Item("sf_stability", t, cl, un, est["value"], uncertainty=u,
                 details={"delta_by_rate": deltas, "full_scale": fs,
+                         # the interval's level z against a true max σ_i (for a study)
+                         "level_z_grid": ief.max_spread_level_grid(
+                             [deltas[w] for w in rates], [sizes[w] - 1 for w in rates],
+                             (lo, hi)) if hi > 0 else None,
                          "reading_max_delta": est["reading"], "reading_rate_dps": r,
                          "max_bias": est["bias"], "max_bias_bounds": list(est["bias_bounds"]),
                          "contenders": est["contenders"], "samples_by_rate": sizes,
@@ -1924,15 +1929,36 @@ def bias_hysteresis(ctx: Context) -> Item:
     if m:
         return m
     pts = _bias_temperature_points(ctx)
-    val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: visit_drift_u_dps(ctx, sep))
+    drift = lambda sep: visit_drift_u_dps(ctx, sep)  # noqa: E731
+    val, diffs, Tm, u = hysteresis_budget(pts, drift)
+    reading = max(abs(v) for v in diffs.values())
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
         "up_minus_down_dps": diffs, "temperature_c": Tm,
+        # the statement's level z against the largest true difference (for a study)
+        "level_z_grid": ief.hysteresis_level_grid(reading, hysteresis_sds(pts, drift),
+                                                  u.interval[1]),
         "reading_iec_dps": max(abs(v) for v in diffs.values()),
         "standard_reading": standard_reading_beside(
             "5.3.3.7", max(abs(v) for v in diffs.values()), " °/s",
             ("the standard's reading max |B_up − B_down| = {v}",
              "that reading less the midpoint of a maximum's selection excess"),
             ("标准的读数 max |B_up − B_down| = {v}", "该读数减去最大值选择超出量的中点"))})
+
+
+def _visit_pairs(T) -> list[tuple[int, int]]:
+    """(rising, falling) visit indices of each temperature visited both ways, in the order
+    of :func:`gonio.specs.iec62047_20.formulas.hysteresis_iec`'s differences."""
+    _, diffs = ief.hysteresis_iec(T, [0.0] * len(T))
+    return [(max(i for i in range(1, len(T)) if T[i] == Tv and T[i] > T[i - 1]),
+             max(i for i in range(1, len(T)) if T[i] == Tv and T[i] < T[i - 1])) for Tv in diffs]
+
+
+def hysteresis_sds(pts, drift_u) -> list[float]:
+    """5.3.3.7: σ of each difference B_up − B_down (the two record means and the bias drift
+    between the visits, ``drift_u`` of their separation), in the differences' order."""
+    T = [p[0] for p in pts]
+    return [math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2 + drift_u(pts[ju][4] - pts[jd][4]) ** 2)
+            for ju, jd in _visit_pairs(T)]
 
 
 def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
@@ -1955,8 +1981,7 @@ def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
               from_u("drift", 0.0, drift_u(pu[4] - pd_[4]), dof=50,
                      source="bias drift between the visits (Allan fit: RRW, BI)")]
     # the value is a maximum over the temperatures visited twice: noise inflates it
-    sds = [math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2 + drift_u(pts[ju][4] - pts[jd][4]) ** 2)
-           for ju, jd in map(visits, diffs)]
+    sds = hysteresis_sds(pts, drift_u)
     excess, _ = rg.selection_excess(np.abs(np.array(list(diffs.values()))), np.array(sds))
     inputs.append(type_b("noise_max", -excess, excess, "rectangular",
                          source="selection excess of the largest of the noisy differences "
