@@ -24,10 +24,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from gonio.analysis.coverage import (ItemCoverage, coverage_table_from, format_coverage,
-                                     item_coverage, level_z_at, spawn_seed, stated_record,
+                                     item_coverage, level_z_at, level_z_discrete, spawn_seed,
+                                     stated_record,
                                      wilson_interval)
 from gonio.atomic import write_text
 from gonio.errors import GonioError
@@ -143,19 +145,29 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
                     **({"value": float(it.value), "truth": float(t),
                         "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
                         **stated_record(it.uncertainty),
-                        **_level_record(it, float(t) if ok else None)}
+                        **_level_record(it, float(t) if ok else None, int(seed), key)}
                        if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
     return out
 
 
-def _level_record(it, truth) -> dict:
+def _level_record(it, truth, seed: int, key: str) -> dict:
     """{"z_level": the interval's level z at the truth} for an item stated by an interval
     whose details give its level table (``level_z_grid``,
-    :func:`gonio.analysis.coverage.level_z_at`); {} otherwise."""
+    :func:`gonio.analysis.coverage.level_z_at`) or its discrete stated distribution
+    (``level_distribution``, :func:`gonio.analysis.coverage.level_z_discrete`, its uniform
+    v drawn from SeedSequence(seed, spawn_key=(crc32 of the item's key,)): the same seed,
+    the same z); {} otherwise."""
+    import zlib
+
     u = it.uncertainty
     if u is None or u.k is not None or u.interval is None:
         return {}
-    z = level_z_at((it.details or {}).get("level_z_grid"), truth)
+    d = it.details or {}
+    z = level_z_at(d.get("level_z_grid"), truth)
+    if z is None and d.get("level_distribution"):
+        ss = np.random.SeedSequence(int(seed), spawn_key=(zlib.crc32(key.encode()),))
+        v = float(np.random.default_rng(ss).random())
+        z = level_z_discrete(d["level_distribution"], truth, v)
     return {} if z is None else {"z_level": z}
 
 

@@ -2178,7 +2178,7 @@ def resolution(ctx: Context) -> Item:
     if m:
         return m
     means = segment_means(ctx.df, "resolution")
-    cands, dets, T, pmfs = [], {}, None, []
+    cands, dets, T, pmfs, runs_data = [], {}, None, [], []
     for run in sorted({s.run for s in means}):
         seg = [s for s in means if s.run == run]
         steps, resp, sig = [], [], []
@@ -2198,19 +2198,27 @@ def resolution(ctx: Context) -> Item:
                                                               s.step)["time_s"])))
         c, ratio = ief.resolution_iec(steps, resp)
         cands.append(c)
-        pmfs.append(rg.fifty_percent_outcome_pmf(steps, rg.fifty_percent_pass_probability(
-            resp, sig, steps, two_sided=False)))
+        runs_data.append((steps, resp, sig))
         dets[f"run{run}"] = {"steps_dps": steps, "ratio": ratio, "candidate_dps": c}
     if any(c is None for c in cands):
         return not_measured("resolution", t, cl, un, "the largest step already fails the 50 % rule")
     out_res = max(cands)
-    noise, nb = math.nan, 0
+    noise, nb, s_ref = math.nan, 0, 0.0
     if ctx.has("static") and T:
         _, rate_dph, dt = _static(ctx)
         P = int(round(T / dt))
         nb = rate_dph.size // P
         if nb >= 2:
             noise = rg.block_mean_stability(rate_dph / S_PER_H, 1.0, P)
+        if nb >= 3:
+            s_ref = referred_step_sd(rate_dph / S_PER_H, P)
+    # the rule's outcome under the data's noise: each referred step's σ at least the static
+    # record's for a T-second mean less its two neighbours' mean (the samples' own s/√n
+    # takes them as white; the gyro's flicker and walk make a T-mean noisier)
+    for steps, resp, sig in runs_data:
+        pmfs.append(rg.fifty_percent_outcome_pmf(steps, rg.fifty_percent_pass_probability(
+            resp, [max(x, s_ref) for x in sig], steps, two_sided=False)))
+    dets["referred_step_sd_static_dps"] = s_ref
     # Out,resolution: a grid value, stated by the central 95 % range of the rule's outcome
     # under the data's noise (its standard deviation u_c, no k, no step term)
     u_rule, pmf = rg.rule_outcome_uncertainty(pmfs, out_res)
@@ -2243,10 +2251,39 @@ def resolution(ctx: Context) -> Item:
         u = replace(u_rule, components=u_rule.components + u_noise.components, u_c=u_c,
                     U=hi - value, interval=(lo, hi) if hi > lo else None,
                     coverage_probability=min(p_iv, 1.0))
+    top = max(k for p in pmfs for k in p if k is not None)
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by,
+        # the stated distribution, max(A, B): A the rule's outcome, B ~ N(Noise,RMS, u_c)
+        "level_distribution": {
+            "atoms": [[float(k), float(w)] for k, w in outcome_pmf_topped(pmf, top).items()],
+            "normal": None if u_noise is None else [float(noise), float(u_noise.u_c)]},
         "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()}})
+
+
+def referred_step_sd(rate, block: int) -> float:
+    """5.6: the standard deviation of a step's mean referred to the mean of the rests before
+    and after it, m_k − (m_(k−1) + m_(k+1))/2, from a static record's (5.4) means of
+    ``block`` samples (non-overlapping, adjacent): the root mean square of that second
+    difference over the record (no mean removed: a constant or a linear drift cancels).
+    For white noise it is σ_T·√1.5 (σ_T the T-mean's); the gyro's flicker and walk make it
+    larger than the samples' own s/√n suggests. Reading taken: the rests and the step are
+    taken as adjacent blocks of the step's length (the settling gaps between them left out).
+
+    >>> rng = np.random.default_rng(1)
+    >>> round(referred_step_sd(rng.standard_normal(400_000), 100) / (0.1 * 1.5 ** 0.5), 1)
+    1.0
+    """
+    x = np.asarray(rate, float)
+    P = int(block)
+    n = x.size // P
+    if P < 1 or n < 3:
+        raise GonioError(f"5.6: a referred step's noise needs ≥ 3 blocks of {P} samples, "
+                         f"got {x.size} samples")
+    m = x[: n * P].reshape(n, P).mean(axis=1)
+    d = m[1:-1] - 0.5 * (m[:-2] + m[2:])
+    return float(np.sqrt(np.mean(d * d)))
 
 
 def max_outcome_normal_sd(pmf: dict, m_b: float, s_b: float) -> float:

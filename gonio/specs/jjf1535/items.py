@@ -500,8 +500,20 @@ def _candidate_item(key, title, clause, cands, details, pmfs) -> Item:
     grid = sorted({abs(r) for d in details.values() for r in d["steps_dps"]}, reverse=True)
     details = {**details, "grid_dps": ", ".join(f"{g:g}" for g in grid),
                "samples": next(iter(details.values()))["samples"],
-               "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()}}
+               "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()},
+               # the stated distribution ("above the grid" as the largest step, as u_c)
+               "level_distribution": {"atoms": _topped_atoms(pmf, grid[0]), "normal": None}}
     return Item(key, title, clause, "°/s", value, uncertainty=u, details=details)
+
+
+def _topped_atoms(pmf: dict, top: float) -> list:
+    """[[outcome, probability], …] of the rule's outcome with "above the grid" (None)
+    counted as the largest tested step."""
+    out: dict = {}
+    for k, w in pmf.items():
+        kk = float(top if k is None else k)
+        out[kk] = out.get(kk, 0.0) + float(w)
+    return [[k, w] for k, w in out.items()]
 
 
 def _rule_run(steps, meas, exp, sig, cands: list, pmfs: list):
