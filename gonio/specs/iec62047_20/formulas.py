@@ -364,11 +364,13 @@ def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
     temperature, 0 on the others: the product over the other temperatures' folded normals
     at 0 is part of it). It holds H with probability ≥ p for any true differences, exactly
     p where every true difference is 0 (independent differences). Where even h = 0 makes
-    the reading improbably small (G(M; 0) < 1 − p: the exact test's empty set), the limit is
-    the reading M itself: never below M (the truth 0 is then held too, so the coverage
-    at H = 0 exceeds p by that probability; the level z of the study is G's, not this
-    floor's). Before 1 Dec 2026 G left the other temperatures' factors out (a bound ≤ 1 on
-    each), which made the interval over-wide at H = 0 (study z sd 0.55).
+    the reading improbably small (G(M; 0) < 1 − p: the exact test's empty set, a sign that
+    the differences, which share the session's drift, are not independent), the limit is
+    the one that holds whatever their correlation: each temperature's folded normal alone,
+    P(M ≤ m) ≤ P(|D_j| ≤ m), inverted and the largest taken (the rule before 1 Dec 2026
+    for every reading). Never below the reading M. The level z of the study is G's.
+    The rule before left the other temperatures' factors out for every reading (a bound
+    ≤ 1 on each), which made the interval over-wide at H = 0 (study z sd 0.55).
 
     >>> from scipy.stats import norm
     >>> h = hysteresis_upper_iec(1.0, [1.0])
@@ -380,6 +382,10 @@ def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
     0.05
     >>> hysteresis_upper_iec(0.0, [0.0, 0.0])        # noise-free: the reading itself
     0.0
+    >>> G0 = float(hysteresis_level_iec(0.45, [1.0, 1.0, 1.0], 0.0)[0])  # < 5 %: no h left
+    >>> h = hysteresis_upper_iec(0.45, [1.0, 1.0, 1.0])                   # one alone
+    >>> round(G0, 4), round(float(norm.cdf(0.45 - h) - norm.cdf(-0.45 - h)), 9)
+    (0.0419, 0.05)
     """
     from scipy import optimize
 
@@ -393,9 +399,18 @@ def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
 
     def f(h):
         return float(hysteresis_level_iec(m, s, h)[0]) - q
+    top, tol = m + 12.0 * float(s.max()), 1e-14 * (m + float(s.max()))
     if f(0.0) > 0.0:
-        top = m + 12.0 * float(s.max())
-        hi = max(hi, optimize.brentq(f, 0.0, top, xtol=1e-14 * (m + float(s.max()))))
+        return float(max(hi, optimize.brentq(f, 0.0, top, xtol=tol)))
+    # the product leaves no h (the differences read smaller together than independent
+    # differences of these σ make likely at 1 − p: the visits share the session's drift, so
+    # they need not be independent): the limit that holds whatever the other differences
+    # and their correlation, P(M ≤ m) ≤ P(|D_j| ≤ m), inverted on each j alone
+    for sj in s[s > 0.0]:
+        def g(h, sj=float(sj)):
+            return float(hysteresis_level_iec(m, [sj], h)[0]) - q
+        if g(0.0) > 0.0:
+            hi = max(hi, optimize.brentq(g, 0.0, top, xtol=tol))
     return float(hi)
 
 
