@@ -4,8 +4,8 @@ Every item whose budget carries the bias drift between its records (the scale-fa
 and everything computed with it, linearity, 5.1.3.5, 5.1.3.8, 5.3.3.3, 5.3.3.6–5.3.3.9)
 takes E[K²] from ``formulas.walk_k2_iec``, the posterior mean given the static record's Allan
 variances (``items.drift_coef_dps``), and no longer from the 95 % bound of
-``formulas.walk_coefficient_bound``; 5.3.3.5's bootstrap draws at the fitted K̂, capped by that
-bound (``items.drift_coef_fitted_dps``). The test replaces the rule and the bound by others
+``formulas.walk_coefficient_bound``; 5.3.3.5's bootstrap draws its walk at the same E[K²]
+(``items.drift_coef_power_on_dps``). The test replaces the rule and the bound by others
 and requires each such item's U to move, and the shared rate-family rule (JJF 1535's,
 ``drift_coefficients`` with the 68 % limits and K̂² + u_K²) to be called by no IEC item:
 an item that kept its own rule, or went back to the shared one, fails here.
@@ -32,7 +32,7 @@ PROTOCOL = ROOT / "tests" / "data" / "pins" / "iec62047-20-small.toml"
 DRIFT_ITEMS = ("scale_factor", "initial_sf_variation", "sf_temperature_coefficient",
                "ratiometric_error", "linearity", "symmetry", "bias_ratiometric_error",
                "bias_temperature_coefficient", "bias_hysteresis", "g_sensitivity",
-               "startup_time")
+               "startup_time", "bias_drift_after_power_on")
 
 
 def _numbers(result) -> dict:
@@ -78,13 +78,13 @@ def test_every_drift_item_takes_the_one_rule(readings, plain, monkeypatch):
     kept = [k for k in DRIFT_ITEMS if now[k][1] == plain[k][1]]
     assert not kept, f"U unchanged by the walk rule: {kept}"
     untouched = {"arw", "bias_instability", "inband_noise", "broadband_noise", "frequency_band",
-                 "bias", "bias_drift_after_power_on"}
+                 "bias"}
     assert all(now[k] == plain[k] for k in untouched)
 
 
 def test_no_drift_item_takes_the_95_percent_bound(readings, plain, monkeypatch):
     """E[K²] is the posterior mean, not the end of a rectangle up to the 95 % bound: scaling
-    that bound moves no drift item's U (it caps only 5.3.3.5's fitted K̂)."""
+    that bound moves no drift item's U."""
     bound = ief.walk_coefficient_bound
 
     def spy(tau_s, adev, edf, p=0.95):

@@ -1223,9 +1223,10 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
     if m:
         return m
     recs = [(tt, ys, y) for _, tt, ys, y in _power_on_records(ctx)]
+    coef, coef_dof = drift_coef_power_on_dps(ctx)
     val, vals, u, m_sel = power_on_drift_budget(recs, ctx.protocol["power_on"]["reference_samples"],
-                                                lambda sep: drift_u_dps(ctx, sep),
-                                                drift_coef_fitted_dps(ctx))
+                                                lambda sep: drift_u_dps(ctx, sep), coef,
+                                                coef_dof)
     return Item("bias_drift_after_power_on", t, cl, un, val, uncertainty=u,
                 details={"per_record_dps": vals, "reading_dps": max(vals),
                          "contending_values": m_sel})
@@ -1247,101 +1248,182 @@ def _one_blas_thread(fn):
     return wrapped
 
 
+def power_on_records_pooled(recs) -> bool:
+    """IEC 62047-20 5.3.3.5, reading taken (docs/iec62047-20-readings.md, 5.3.3.5): the
+    records are repeated power-ons of one gyro (5.3.3.5 reads "the largest over the
+    records" of one characteristic), so where they have the same samples, smoothing and
+    times from power-on, ONE transient c_i + A·e^(−t/τ) (A, τ common, the level c_i each
+    record's own) is fitted to all of them — the least-squares fit of the records' mean,
+    exactly. Fitted one by one, each record's fit carries its own noise as a different
+    transient, the replicates then see records of unequal drift, and the selection of the
+    largest over the records (the reading's excess where the records share the truth)
+    goes uncorrected. Records that differ in length or timing are fitted one by one."""
+    if len(recs) < 2:
+        return False
+    t0, ys0, y0 = recs[0]
+    span = max(1.0, abs(float(t0[-1] - t0[0]))) if t0.size else 1.0
+    return all(ys.size == ys0.size and y.size == y0.size and tt.size == t0.size
+               and np.allclose(tt - tt[0], t0 - t0[0], rtol=0.0, atol=1e-9 * span)
+               for tt, ys, y in recs[1:])
+
+
+def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.0)) -> dict:
+    """The parametric bootstrap of 5.3.3.5 (:func:`power_on_drift_budget`): the records'
+    readings, their fitted transient(s) (:func:`power_on_records_pooled`) and
+    :data:`POWER_ON_MC_TRIALS` replicates of the fitted records, each read (R*) and fitted
+    (R̂*) as the data are. ``scale`` multiplies the three noise variances (white σ_y²,
+    walk K², flicker B²; the wander of ``drift_u`` by the second) with the same random
+    numbers: the sensitivities of u_c² for its degrees of freedom."""
+    P = max(recs[0][2].size // max(recs[0][1].size, 1), 1)
+    rng = np.random.default_rng(POWER_ON_MC_SEED)
+    n_mc = POWER_ON_MC_TRIALS
+    sw, sk, sb = (float(x) for x in scale)
+    pooled = power_on_records_pooled(recs)
+    vals, dists, sig, designs = [], [], [], []
+    for tt, ys, y in recs:
+        ref = float(y[:nr].mean())
+        d = np.abs(ys - ref)
+        vals.append(float(d.max()))
+        dists.append(d)
+        sig.append(float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0)
+        designs.append(_transient_designs(tt, y.size, P, nr))
+    if pooled:
+        fits = _transient_fits(np.mean([ys for _, ys, _ in recs], axis=0)[None, :],
+                               designs[0]) * len(recs)
+    else:
+        fits = [_transient_fits(ys[None, :], dz)[0] for (_, ys, _), dz in zip(recs, designs)]
+    r_hat = max(f[2] for f in fits)
+    r_star, r_fit = np.zeros(n_mc), np.zeros(n_mc)
+    kept, ys_sum = [], 0.0                  # (replicates less reference, fitted transient)
+    for (tt, ys, y), s_y, (mb, mr, _), dz in zip(recs, sig, fits, designs):
+        nb = ys.size
+        white = rng.standard_normal((n_mc, nb * P)) * (s_y * math.sqrt(sw))
+        ys_star = mb[None, :] + white.reshape(n_mc, nb, P).mean(2)
+        ref_star = mr + white[:, :nr].mean(1)
+        if drift_coef is not None:
+            ys_star += _drift_draws(rng, nb, P, nr, float(tt[1] - tt[0]) / P if nb > 1 else 1.0,
+                                    (drift_coef[0] * sk, drift_coef[1] * sb), n_mc)
+        else:
+            w = _wander_draws(rng, tt - tt[0], lambda s: math.sqrt(sk) * drift_u(s), n_mc)
+            ys_star += w
+            ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
+        dev = ys_star - ref_star[:, None]
+        r_star = np.maximum(r_star, np.abs(dev).max(1))
+        kept.append((dev, mb - mr))
+        if pooled:
+            ys_sum = ys_sum + ys_star
+        else:
+            r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, dz)]))
+    if pooled:
+        r_fit = np.array([f[2] for f in _transient_fits(ys_sum / len(recs), designs[0])])
+    return {"vals": vals, "dists": dists, "sig": sig, "P": P, "pooled": pooled,
+            "r_hat": r_hat, "r_star": r_star, "r_fit": r_fit, "kept": kept,
+            "white_dof": float(sum(max(y.size - 2, 1) for _, _, y in recs))
+            / SECOND_DIFFERENCE_RHO2}
+
+
+#: Σ ρ_k² of white noise's second differences (ρ₁ = −2/3, ρ₂ = 1/6): σ_y² from m second
+#: differences has m/Σρ² degrees of freedom (var s² = 2σ⁴Σρ²/m for a Gaussian series).
+SECOND_DIFFERENCE_RHO2 = 1.0 + 2.0 * ((2.0 / 3.0) ** 2 + (1.0 / 6.0) ** 2)
+
+
+def power_on_dof(shares, dofs, n_mc: int = 0) -> float:
+    """5.3.3.5's ν_eff by Welch–Satterthwaite (JCGM 100 G.4.1) over the components of u_c²:
+    ``shares`` s_i = ∂ln u_c²/∂ln v_i, the sensitivity of u_c² to each noise variance v_i
+    (white σ_y², walk K², flicker B²; for a Gaussian model, linear in the v_i, the share of
+    u_c² each holds), ``dofs`` ν_i of each v_i's estimate, and the replicates' own count
+    (u_c from ``n_mc`` draws: share 1, ν = n_mc − 1): ν_eff = 1/Σ s_i²/ν_i, i.e. u_c⁴/Σ
+    u_i⁴/ν_i with u_i = √s_i·u_c.
+
+    >>> round(power_on_dof([0.5, 0.5, 0.0], [20.0, 20.0, 3.0]), 6)
+    40.0
+    >>> round(power_on_dof([1.0], [math.inf], 401), 6)
+    400.0
+    """
+    s = [max(float(x), 0.0) for x in shares] + ([1.0] if n_mc > 1 else [])
+    nu = [float(x) for x in dofs] + ([float(n_mc - 1)] if n_mc > 1 else [])
+    return welch_satterthwaite(1.0, [math.sqrt(x) for x in s], nu)
+
+
 @_one_blas_thread
-def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
+def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
+                          coef_dof=(math.inf, math.inf)
                           ) -> tuple[float, list, Uncertainty, int]:
     """5.3.3.5 from the power-on records ``recs`` ((block times s, smoothed output °/s, raw
     output °/s) each), the reference part's ``nr`` samples and ``drift_u`` (separation s →
     standard uncertainty °/s of the bias drift): (value, per-record readings, Uncertainty,
     number of contending smoothed values).
 
-    The reading R = max over the records and their smoothed values of |Out(t) − Out,ave|
-    is an extreme of noisy values, so noise raises it by a selection excess that depends on
-    how many values share the largest true distance (up to the whole settled part of a
-    record). The excess and the estimate's spread are evaluated as JCGM 101 propagates a
-    distribution, by a parametric bootstrap of the fitted model: each record is fitted with
-    the power-on transient's usual form c + A·e^(−t/τ) (:func:`_transient_fits`: least
-    squares on the smoothed values, τ on a grid, A = 0 included), giving R̂, the reading of
-    the fitted records; :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records
-    are drawn with the record's noise — white samples of σ_y = √(var Δ²y/6) (second
-    differences: a transient smooth on the sample interval does not enter them) and the
-    bias drift — with ``drift_coef`` = (K² (°/s)²/s, B² (°/s)²) of the static record's
-    Allan fit at its fitted values (:func:`drift_coef_fitted_dps`) the
-    exact covariance of the smoothed values less the reference under the rate random walk
-    and the flicker (the five-term model's generalised covariance: flicker differences grow
-    as ln of the separation, IEEE 952 C.1), else a Gaussian process of stationary
-    increments with variogram D(s) = ``drift_u``(s)² — and each replicate is
-    read and fitted as the data are. The first estimate is V = R − e(R̂), e(R̂) = E*[R*] − R̂
-    the selection excess; its replicates, linearised in the fitted reading (a double
-    bootstrap to first order), V* = R* − e(R̂) − g·(R̂* − R̂) estimate V's distribution
-    about R̂, with g = de/dR̂ at the reading less the fit's bias (:func:`_excess_slope`;
-    g = −1, the excess not following the signal, where that reading is not above
-    :data:`POWER_ON_RESOLVED` sd of R̂*): the value is V less the residual bias E*[V*] − R̂
-    (the fit's own selection at small signals), u the standard deviation of V* (type A,
-    ν = 50: its noise figures come from the records and the static fit). g = −1 throughout
-    counts the bias drift the fit absorbs twice (in R* and in R̂*): u over-wide where the
-    drift dominates. A value below 0 (records
-    without a transient, whose reading is all excess) is stated as 0, the measurand's bound.
-    The statement is the 95 % interval of the same replicates (:func:`power_on_interval`),
-    not value ± U: a drift is non-negative, and V's distribution is skewed near 0.
-    The truth this estimates is the transient's drift (the noise-free records); the bias
-    drift is noise to it. The contenders (details) are the smoothed values within 2√2·σ of
-    the largest (σ of one smoothed value less the reference)."""
-    P = max(recs[0][2].size // max(recs[0][1].size, 1), 1)
-    rng = np.random.default_rng(POWER_ON_MC_SEED)
-    n_mc = POWER_ON_MC_TRIALS
-    vals, dists, sig = [], [], []
-    r_hat, r_star, r_fit = 0.0, np.zeros(n_mc), np.zeros(n_mc)
-    kept = []                           # (replicates less reference, fitted transient)
-    for tt, ys, y in recs:
-        ref = float(y[:nr].mean())
-        d = np.abs(ys - ref)
-        vals.append(float(d.max()))
-        dists.append(d)
-        s_y = float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0
-        sig.append(s_y)
-        design = _transient_designs(tt, y.size, P, nr)
-        (mb, mr, rm), = _transient_fits(ys[None, :], design)
-        r_hat = max(r_hat, rm)
-        nb = ys.size
-        white = rng.standard_normal((n_mc, nb * P)) * s_y
-        ys_star = mb[None, :] + white.reshape(n_mc, nb, P).mean(2)
-        ref_star = mr + white[:, :nr].mean(1)
-        if drift_coef is not None:
-            ys_star += _drift_draws(rng, nb, P, nr, float(tt[1] - tt[0]) / P if nb > 1 else 1.0,
-                                    drift_coef, n_mc)
-        else:
-            w = _wander_draws(rng, tt - tt[0], drift_u, n_mc)               # (n_mc, nb)
-            ys_star += w
-            ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
-        dev = ys_star - ref_star[:, None]
-        r_star = np.maximum(r_star, np.abs(dev).max(1))
-        kept.append((dev, mb - mr))
-        r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, design)]))
+    The measurand: the largest |Out(t) − Out,ave| of the gyro's noise-free power-on output
+    (its transient's smoothed values less its reference mean), the largest over the
+    records. The reading R = max over the records and their smoothed values of
+    |Out(t) − Out,ave| is an extreme of noisy values, so noise raises it by a selection
+    excess that depends on how many values share the largest true distance (up to the whole
+    settled part of every record). The excess and the estimate's spread are evaluated as
+    JCGM 101 propagates a distribution, by a parametric bootstrap of the fitted model
+    (:func:`_power_on_replicates`): one transient c_i + A·e^(−t/τ) fitted to the records
+    together (:func:`power_on_records_pooled`; one by one where their timing differs;
+    :func:`_transient_fits`: least squares on the smoothed values, τ on a grid, A = 0
+    included), giving R̂, the reading of the fitted records; :data:`POWER_ON_MC_TRIALS`
+    seeded replicates of the fitted records are drawn with the record's noise — white
+    samples of σ_y = √(var Δ²y/6) (second differences: a transient smooth on the sample
+    interval does not enter them) and the bias drift — with ``drift_coef`` = (K² (°/s)²/s,
+    B² (°/s)²) from the static record (:func:`drift_coef_power_on_dps`) the exact covariance of the smoothed values less the
+    reference under the rate random walk and the flicker (the five-term model's generalised
+    covariance: flicker differences grow as ln of the separation, IEEE 952 C.1), else a
+    Gaussian process of stationary increments with variogram D(s) = ``drift_u``(s)² — and
+    each replicate is read and fitted as the data are. The first estimate is V = R − e(R̂),
+    e(R̂) = E*[R*] − R̂ the selection excess; its replicates, linearised in the fitted
+    reading (a double bootstrap to first order), V* = R* − e(R̂) − g·(R̂* − R̂) estimate V's
+    distribution about R̂, with g = de/dR̂ at the reading less the fit's bias
+    (:func:`_excess_slope`; g = −1, the excess not following the signal, where that reading
+    is not above :data:`POWER_ON_RESOLVED` sd of R̂*): the value is V less the residual bias
+    E*[V*] − R̂ (the fit's own selection at small signals), u_c the standard deviation of
+    V*. A value below 0 (records without a transient, whose reading is all excess) is
+    stated as 0, the measurand's bound.
+
+    ν_eff (:func:`power_on_dof`, Welch–Satterthwaite): u_c rests on three estimated noise
+    variances — σ_y² (second differences, :data:`SECOND_DIFFERENCE_RHO2`), K² and B² with
+    ``coef_dof`` = (ν_K, ν_B) from the Allan fit (:func:`drift_coef_power_on_dps`) — and on
+    the replicates' count; each enters by its share of u_c²,
+    s_i = ∂ln u_c²/∂ln v_i, a central difference (± :data:`POWER_ON_SHARE_STEP`) with the
+    same random numbers. The statement is the 95 % interval of the same replicates
+    (:func:`power_on_interval`): the pivot of V*'s quantiles, each side scaled by
+    t₉₅(ν_eff)/z₉₅ (the replicates' quantiles are those of the fitted noise; the factor
+    carries the noise estimates' own uncertainty, as t does in the GUM), not value ± U: a
+    drift is non-negative, and V's distribution is skewed near 0. The contenders (details)
+    are the smoothed values within 2√2·σ of the largest (σ of one smoothed value less the
+    reference)."""
+    rep = _power_on_replicates(recs, nr, drift_u, drift_coef)
+    vals, r_hat, r_star, r_fit = rep["vals"], rep["r_hat"], rep["r_star"], rep["r_fit"]
     excess = float(r_star.mean() - r_hat)
     r_at = r_hat - float(r_fit.mean() - r_hat)
-    g = (_excess_slope(kept, r_hat, r_at) if r_at > POWER_ON_RESOLVED * float(r_fit.std(ddof=1))
-         else -1.0)
+    g = (_excess_slope(rep["kept"], r_hat, r_at)
+         if r_at > POWER_ON_RESOLVED * float(r_fit.std(ddof=1)) else -1.0)
     v_star = r_star - excess - g * (r_fit - r_hat)
     resid = float(v_star.mean() - r_hat)
     u_v = float(v_star.std(ddof=1))
+    shares = _power_on_shares(recs, nr, drift_u, drift_coef, g, u_v)
+    nu = power_on_dof(shares, [rep["white_dof"], *coef_dof], POWER_ON_MC_TRIALS)
     i = int(np.argmax(vals))
-    sd_i = sig[i] * math.sqrt(1.0 / P + 1.0 / nr)
-    cont = np.concatenate(dists)
+    sd_i = rep["sig"][i] * math.sqrt(1.0 / rep["P"] + 1.0 / nr)
+    cont = np.concatenate(rep["dists"])
     m_sel = int(np.sum(cont >= cont.max() - 2 * math.sqrt(2) * sd_i))
-    src = (f"{n_mc} seeded replicates of the fitted records (c + A·e^(−t/τ), white noise "
-           "σ_y, bias drift from the Allan fit)")
+    src = (f"{POWER_ON_MC_TRIALS} seeded replicates of the fitted records (c + A·e^(−t/τ)"
+           f"{', one transient for all records' if rep['pooled'] else ''}, white noise σ_y, "
+           "bias drift from the Allan fit)")
     u = gum(lambda v, e, b: v - e - b,
-            [from_u("R", vals[i], u_v, dof=50,
+            [from_u("R", vals[i], u_v, dof=nu,
                     source="largest |Out(t) − Out,ave| over the records; u: the estimate's "
-                           "spread in " + src),
+                           "spread in " + src + "; ν: Welch–Satterthwaite over σ_y², K², "
+                           "B² and the replicates' count"),
              from_u("excess", excess, 0.0,
                     source="selection excess of the largest smoothed value, E*[R*] − R̂, "
                            "removed"),
              from_u("fit_bias", resid, 0.0,
                     source="residual bias of the corrected reading, E*[V*] − R̂, removed")])
     raw = vals[i] - excess - resid
-    lo, hi = power_on_interval(raw, v_star - v_star.mean(), u.U)
+    lo, hi = power_on_interval(raw, v_star - v_star.mean(), nu)
     value = max(raw, 0.0)
     # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
@@ -1349,37 +1431,67 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
     return value, vals, u, m_sel
 
 
+#: Relative step of the noise variances for the shares of u_c² (:func:`_power_on_shares`).
+POWER_ON_SHARE_STEP = 0.2
+
+
+def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float) -> list:
+    """s_i = ∂ln u_c²/∂ln v_i of 5.3.3.5's u_c² = var(R* − g·R̂*) for the white, walk and
+    flicker variances (in that order), by a central difference of ± :data:`POWER_ON_SHARE_STEP`
+    with the same random numbers (:func:`_power_on_replicates`'s ``scale``); 0 for a
+    variance that is 0."""
+    if not u_v > 0:
+        return [0.0, 0.0, 0.0]
+    span = float(recs[0][0][-1] - recs[0][0][0]) if recs[0][0].size > 1 else 0.0
+    k2, b2 = drift_coef if drift_coef is not None else (float(drift_u(span) > 0), 0.0)
+    out = []
+    for j, v in enumerate((1.0, k2, b2)):
+        if not v > 0:
+            out.append(0.0)
+            continue
+        var = []
+        for f in (1.0 + POWER_ON_SHARE_STEP, 1.0 - POWER_ON_SHARE_STEP):
+            sc = [1.0, 1.0, 1.0]
+            sc[j] = f
+            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, sc)
+            var.append(float(np.var(rep["r_star"] - g * rep["r_fit"], ddof=1)))
+        out.append((var[0] - var[1]) / (2.0 * POWER_ON_SHARE_STEP * u_v ** 2))
+    return out
+
+
 #: ``k_source`` of 5.3.3.5, stated by the interval of its replicates (:func:`power_on_interval`).
-K_SOURCE_POWER_ON = ("replicates' distribution (pivot, 2.5 % each side, each side at least "
-                     "t95·u_c)")
+K_SOURCE_POWER_ON = ("replicates' distribution (pivot, 2.5 % each side, scaled by "
+                     "t95(ν_eff)/z95, ν_eff by Welch–Satterthwaite)")
 
 
-def power_on_interval(raw: float, d: np.ndarray, reach: float = 0.0,
+def power_on_interval(raw: float, d: np.ndarray, nu: float = math.inf,
                       p: float = 0.95) -> tuple[float, float]:
     """The 95 % interval of 5.3.3.5's drift θ ≥ 0 from the corrected estimate ``raw`` (the
     reading less the selection excess and the fit's residual bias; below 0 where the
     reading is all excess) and ``d``, the replicates of the estimate's error (V* less its
-    mean): the pivot [raw − q_{1−α/2}(d), raw − q_{α/2}(d)], α = 1 − p, 2.5 % each side
-    (JCGM 101 7.7, as 5.4.5.3's floor rule), each side reaching at least ``reach`` (the
-    GUM's t₉₅(ν)·u_c of the same replicates' spread: the union of the two intervals, so
-    that neither the replicates' skew — a 2.5 % tail of 400 draws — nor the fitted
-    model's noise, which on the study bench is narrower than the estimate's spread, makes
-    it shorter on one side than the symmetric one), with raw taken at 0 where it is below
-    (θ ≥ 0: raising the estimate to the measurand's bound only raises the upper end) and
-    the lower end at 0 where it falls below (θ ≥ 0: no probability is lost).
+    mean): the pivot [raw − f·q_{1−α/2}(d), raw − f·q_{α/2}(d)], α = 1 − p, 2.5 % each side
+    (JCGM 101 7.7, as 5.4.5.3's floor rule), each side scaled by f = t_{1−α/2}(ν)/z_{1−α/2}
+    (``nu``: ν_eff of u_c, :func:`power_on_dof`; the replicates are drawn at the fitted
+    noise, and f carries those estimates' uncertainty as the GUM's t does — for normal
+    replicates the interval is value ± t₉₅(ν)·u_c exactly), with raw taken at 0 where it is
+    below (θ ≥ 0: raising the estimate to the measurand's bound only raises the upper end)
+    and the lower end at 0 where it falls below (θ ≥ 0: no probability is lost).
 
     >>> d = np.linspace(-1.0, 1.0, 401)
     >>> [round(x, 3) for x in power_on_interval(2.0, d)]
     [1.05, 2.95]
-    >>> [round(x, 3) for x in power_on_interval(2.0, d, 1.0)]
-    [1.0, 3.0]
+    >>> [round(x, 3) for x in power_on_interval(2.0, d, 4.0)]
+    [0.654, 3.346]
     >>> [round(x, 3) for x in power_on_interval(-0.5, d)]
     [0.0, 0.95]
     """
-    q_lo, q_hi = np.quantile(np.asarray(d, float), [(1.0 - p) / 2.0, (1.0 + p) / 2.0])
+    from scipy.stats import norm, t as student_t
+
+    q = (1.0 + p) / 2.0
+    f = float(student_t.ppf(q, nu) / norm.ppf(q)) if math.isfinite(nu) else 1.0
+    q_lo, q_hi = np.quantile(np.asarray(d, float), [1.0 - q, q])
     est = max(float(raw), 0.0)
-    return (max(est - max(float(q_hi), reach), 0.0),
-            est + max(-float(q_lo), reach))
+    return max(est - f * float(q_hi), 0.0), est - f * float(q_lo)
 
 
 POWER_ON_MC_TRIALS = 400
@@ -1791,8 +1903,7 @@ def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
 def walk_k2_bound_dps(ctx: Context) -> float:
     """The largest rate random walk K² ((°/s)²/s) the static record (5.4) allows, by
     :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound` (min over τ of the 95 %
-    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ) — the cap of the fitted K̂² in
-    :func:`drift_coef_fitted_dps` (5.3.3.5's bootstrap). Not finite when no τ bounds it."""
+    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ). Not finite when no τ bounds it."""
     key = ("walk_k2_bound", ctx.a_base, ctx.null_output)
     if key not in ctx.cache:
         allan = _static(ctx)[0]
@@ -1841,8 +1952,7 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     99.99 % limit; the flicker as B̂² + u_B². The standard itself states no drift term
     (5.3.3 reads each item from its own records), so the rule is gonio's reading,
     documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws its replicates
-    at the fitted values instead (:func:`drift_coef_fitted_dps`, capped by
-    :func:`walk_k2_bound_dps`). Where the posterior has no finite mean (no usable τ), the
+    at this E[K²] and the fitted B̂² (:func:`drift_coef_power_on_dps`). Where the posterior has no finite mean (no usable τ), the
     record's 95 % bound, else the fitted K̂², else refused (never 0 by default). The same
     refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
     if not _drift_varies(ctx):
@@ -1864,26 +1974,32 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     return ctx.cache[key]
 
 
-def drift_coef_fitted_dps(ctx: Context) -> tuple[float, float]:
-    """(K̂² (°/s)²/s, B̂² (°/s)²): the static record's Allan fit (IEEE 952 Annex C) at its
-    fitted values, the point the parametric bootstrap of 5.3.3.5 (JCGM 101 style, a plug-in
-    of the fitted model) draws its replicates from. Not E[K²] of :func:`drift_coef_dps`
-    (the rule of a drift term stated as a standard uncertainty): the replicates' spread is
-    u itself, so a coefficient inflated by its own uncertainty widens u twice (K̂² + u_K²:
-    z sd 0.55 on 40 built-in seeds). K̂² is held to the record's 95 % bound
-    (:func:`walk_k2_bound_dps`); an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
-    The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
+def drift_coef_power_on_dps(ctx: Context) -> tuple[tuple[float, float], tuple[float, float]]:
+    """((K² (°/s)²/s, B² (°/s)²), (ν_K, ν_B)): the bias drift 5.3.3.5's parametric bootstrap
+    (JCGM 101 style) draws its replicates from, with the degrees of freedom of each for its
+    ν_eff (:func:`power_on_dof`). The walk: E[K²] of the one rule (:func:`drift_coef_dps`,
+    the posterior mean given the static record) — the replicates' variance is linear in K²,
+    so drawing at E[K²] propagates K's state of knowledge where the record does not resolve
+    the walk (the fitted K̂ is then 0 in about half the study's records, and a walk drawn at
+    K̂ = 0 leaves the bench's walk out of u_c); ν_K = K̂²/(2u_K²) of the five-term fit where
+    it resolves K̂ (K̂ > u_K), else 1. The flicker: the fit's B̂² (resolved on any record
+    this item meets: B̂/B 0.74–1.19 on 90 study records), ν_B = B̂²/(2u_B²). The same
+    refusals as :func:`drift_u_dps`; a record that does not vary: ((0, 0), (∞, ∞))."""
     if not _drift_varies(ctx):
-        return 0.0, 0.0
+        return (0.0, 0.0), (math.inf, math.inf)
     fit = _noise_fit(ctx)
 
     def ok(x):
         return abs(float(x)) if math.isfinite(float(x)) else 0.0
-    k2 = ok(fit.K) ** 2 / S_PER_H ** 2
-    bound = walk_k2_bound_dps(ctx)
-    if math.isfinite(bound):
-        k2 = min(k2, bound)
-    return k2, ok(fit.B) ** 2 / S_PER_H ** 2
+
+    def dof(x, ux):                     # ν of x² from u(x); an unresolved x: 1
+        if not x > ux:
+            return 1.0
+        return x * x / (2.0 * ux * ux) if ux > 0 else math.inf
+    k2 = drift_coef_dps(ctx)[0]
+    b = ok(fit.B)
+    return (k2, b * b / S_PER_H ** 2), (max(dof(ok(fit.K), ok(fit.u_K)), 1.0),
+                                        max(dof(b, ok(fit.u_B)), 1.0))
 
 
 def _bias_temperature_points(ctx: Context):
