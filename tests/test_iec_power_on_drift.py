@@ -92,3 +92,85 @@ def test_power_on_drift_budget_with_a_rate_random_walk():
     z, hits = _study(1.0, 30.0, 100, seed=11, rrw_dps_sqrt_s=0.02)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.4 and 0.7 <= z.std() <= 1.3, (z.mean(), z.std())
+
+
+def _bench_records(rng, gyro, n=900, dt=1.0, P=10):
+    """Two power-ons of the study's programme (900 samples at 1 s, smoothing 10) on the
+    bench's own noise generator (white, the Gauss–Markov sum of its bias instability, its
+    rate random walk; a new noise state per power-on, as the bench powers up) and its
+    transient A·e^(−t/τ) as interval means, computed here."""
+    from gonio.bench.rate_gyro import NoiseState
+
+    t = np.arange(n) * dt
+    tr = gyro.warmup_bias_dps * gyro.warmup_tau_s / dt * (
+        np.exp(-t / gyro.warmup_tau_s) - np.exp(-(t + dt) / gyro.warmup_tau_s))
+    tt = t.reshape(-1, P).mean(1)
+    recs = []
+    for _ in range(2):
+        y = 0.2 + tr + NoiseState(gyro, rng).samples(n, dt, 22.5)
+        recs.append((tt, y.reshape(-1, P).mean(1), y))
+    return recs, tr
+
+
+def test_power_on_drift_on_the_bench_noise_is_centred_and_covers():
+    """The study bench's records (its transient 0.12 °/s, τ 150 s, and its noise: 1.8 °/√h,
+    bias instability 22.3 °/h, walk 36.7 °/h/√h) with the walk and flicker at the bench's
+    own K and B: the truth is the noise-free transient's largest |block − reference|,
+    computed here. Both records share it, so the reading's excess holds the selection of
+    the larger of two records; a transient fitted to each record alone carried each
+    record's noise as a different drift and missed that selection (120 trials, seed 5:
+    z +0.37, 110/120 intervals, 10 with the truth below)."""
+    from gonio.specs._rate_family.simulate import study_bench
+
+    g = study_bench(power_on_transient=True).gyro
+    rng = np.random.default_rng(5)
+    coef = ((g.rrw_dph_sqrt_h / 3600.0 / 60.0) ** 2, (g.bias_instability_dph / 3600.0) ** 2)
+    z, hits = [], 0
+    for _ in range(120):
+        recs, tr = _bench_records(rng, g)
+        blocks = tr.reshape(-1, 10).mean(1)
+        truth = float(np.max(np.abs(blocks - tr[:60].mean())))
+        val, vals, u, m = I.power_on_drift_budget(recs, 60, lambda s: 0.0, coef)
+        z.append((val - truth) / u.u_c)
+        hits += u.interval[0] <= truth <= u.interval[1]
+    z = np.array(z)
+    assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
+    assert abs(z.mean()) < 0.25 and 0.7 <= z.std() <= 1.3, (z.mean(), z.std())
+
+
+def test_power_on_interval_is_t_nu_times_u_for_normal_replicates():
+    """Closed form: for replicates whose errors are normal with sd s (their exact quantiles),
+    the pivot scaled by t95(ν)/z95 is value ± t95(ν)·s (scipy's t), at any ν; ν = ∞: ± 1.96 s."""
+    from scipy.stats import norm, t as student_t
+
+    s, n = 0.01, 20001
+    d = s * norm.ppf((np.arange(n) + 0.5) / n)
+    for nu in (3.0, 12.5, 66.0, float("inf")):
+        lo, hi = I.power_on_interval(1.0, d, nu)
+        k = float(student_t.ppf(0.975, nu))
+        assert lo == pytest.approx(1.0 - k * s, abs=2e-5) and hi == pytest.approx(1.0 + k * s,
+                                                                                  abs=2e-5)
+
+
+def test_power_on_dof_for_white_noise_alone():
+    """Records without transient and white noise alone: u_c² scales with σ_y² (every
+    replicate is σ_y times a fixed draw about the fitted records, which hold only the small
+    transient fitted to the noise), so σ_y²'s share of u_c² is ≈ 1 and ν_eff = 1/(1/ν_w + 1/(n_MC − 1)), ν_w = Σ(n − 2)/Σρ² of the
+    second differences (ρ₁ = −2/3, ρ₂ = 1/6: Σρ² = 1 + 2(4/9 + 1/36) = 35/18), by
+    Welch–Satterthwaite; the walk and flicker, absent, hold no share."""
+    rng = np.random.default_rng(3)
+    n, P = 900, 10
+    tt = np.arange(n).reshape(-1, P).mean(1)
+    recs = []
+    for _ in range(2):
+        y = 0.1 + 0.03 * rng.standard_normal(n)
+        recs.append((tt, y.reshape(-1, P).mean(1), y))
+    rep = I._power_on_replicates(recs, 60, lambda s: 0.0, None)
+    g = -1.0 if not rep["r_hat"] > 0 else 0.0
+    shares = I._power_on_shares(recs, 60, lambda s: 0.0, None, g,
+                                float(np.std(rep["r_star"] - g * rep["r_fit"], ddof=1)))
+    nu_w = 2 * (n - 2) / (35.0 / 18.0)
+    assert shares == pytest.approx([1.0, 0.0, 0.0], abs=0.05)
+    assert rep["white_dof"] == pytest.approx(nu_w)
+    nu = I.power_on_dof(shares, [nu_w, 5.0, 5.0], I.POWER_ON_MC_TRIALS)
+    assert nu == pytest.approx(1.0 / (1.0 / nu_w + 1.0 / (I.POWER_ON_MC_TRIALS - 1)))
