@@ -642,8 +642,10 @@ DCC_ZH: dict[str, str] = {
     "normal range": "正态极差",
     "folded-normal maximum": "折叠正态最大值",
     "floor rule's distribution (pivot)": "下限规则的分布（枢轴量）",
-    "replicates' distribution (pivot, 2.5 % each side, each side at least t95·u_c)":
-        "重复样本的分布（枢轴量，两侧各 2.5 %，每侧不小于 t95·u_c）",
+    "replicates' distribution (pivot, 2.5 % each side, scaled by t95(ν_eff)/z95, ν_eff by "
+    "Welch–Satterthwaite)":
+        "重复样本的分布（枢轴量，两侧各 2.5 %，按 t95(ν_eff)/z95 放大，ν_eff 由 "
+        "Welch–Satterthwaite 公式求得）",
     "outcome distribution": "结果分布",
     "its own": "其自身",
     "Reading taken of the specification's text": "对规范条文的理解",

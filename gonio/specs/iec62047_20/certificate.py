@@ -139,10 +139,18 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "记录期间的零偏漂移（Allan 拟合：RRW、BI）：其最大偏移的均方根，√(2G)·u_drift(记录)"),
     (r"bias drift over the record \(Allan fit: RRW, BI\)", "记录期间的零偏漂移（Allan 拟合：RRW、BI）"),
     (r"largest \|Out\(t\) − Out,ave\| over the records; u: the estimate's spread in (\d+) seeded "
+     r"replicates of the fitted records \(c \+ A·e\^\(−t/τ\), one transient for all records, "
+     r"white noise σ_y, bias drift from the Allan fit\); ν: Welch–Satterthwaite over σ_y², K², "
+     r"B² and the replicates' count",
+     "各记录中 |Out(t) − 参考段平均输出| 的最大值；u：拟合记录（c + A·e^(−t/τ)，各记录共用一个暂态；"
+     "白噪声 σ_y、由 Allan 拟合得到的零偏漂移）的 {1} 次定种子复现中该估计值的分散性；ν：由 σ_y²、"
+     "K²、B² 及复现次数按 Welch–Satterthwaite 公式求得"),
+    (r"largest \|Out\(t\) − Out,ave\| over the records; u: the estimate's spread in (\d+) seeded "
      r"replicates of the fitted records \(c \+ A·e\^\(−t/τ\), white noise σ_y, bias drift from "
-     r"the Allan fit\)",
+     r"the Allan fit\); ν: Welch–Satterthwaite over σ_y², K², B² and the replicates' count",
      "各记录中 |Out(t) − 参考段平均输出| 的最大值；u：拟合记录（c + A·e^(−t/τ)、白噪声 σ_y、由 Allan "
-     "拟合得到的零偏漂移）的 {1} 次定种子复现中该估计值的分散性"),
+     "拟合得到的零偏漂移）的 {1} 次定种子复现中该估计值的分散性；ν：由 σ_y²、K²、B² 及复现次数按 "
+     "Welch–Satterthwaite 公式求得"),
     (r"selection excess of the largest smoothed value, E\*\[R\*\] − R̂, removed",
      "平滑值取最大者的选择超出量 E*[R*] − R̂（已减去）"),
     (r"residual bias of the corrected reading, E\*\[V\*\] − R̂, removed",
