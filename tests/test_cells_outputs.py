@@ -6,17 +6,25 @@ checked from the outside: the CLI's demo is run and every output it writes is pa
   draft, no range/T, no spread, no correction beside it; every such reading is in the one
   labelled table beside the results (``id="beside"``), each number equal to results.json.
   The line under the table names U as what it is (each point's U), not "Certified".
+* A computed coverage probability (JJF 7.2.6/7.2.7) is the same p in the certificate,
+  summary.txt, the DCC, items.csv and results.json (``p_stated``, ``u_c_of``), rounded down.
 """
 
 from __future__ import annotations
 
+import csv
 import html
 import json
+import math
 import re
 
 import pytest
+from lxml import etree
 
 from gonio.cli import main
+from gonio.report.dcc import DCC_NS, SI_NS
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
 
 SUP = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
 
@@ -70,6 +78,18 @@ def optical(tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="module")
+def jjf(tmp_path_factory):
+    d = tmp_path_factory.mktemp("jjf") / "demo"
+    assert main(["demo", "--spec", "jjf1535-2015", "--seed", "1", "--out", str(d)]) == 0
+    with open(d / "tables" / "items.csv", encoding="utf-8", newline="") as f:
+        rows = {r["item"]: r for r in csv.DictReader(f)}
+    return {"res": json.loads((d / "results.json").read_text(encoding="utf-8")),
+            "summary": (d / "summary.txt").read_text(encoding="utf-8"),
+            "html": (d / "certificate.html").read_text(encoding="utf-8"),
+            "dcc": etree.parse(str(d / "certificate.dcc.xml")).getroot(), "items": rows}
+
+
 #: The fields of an item a result cell may show: its statement (value, max|E_i| and its
 #: sign, the interval's ends or bound, U, k) and the point it is at.
 CELL_FIELDS = re.compile(r"^items\.[a-z_]+\.(value|upper_bound|uncertainty\.[A-Za-z_.0-9]+|"
@@ -113,3 +133,40 @@ def test_optical_result_cells_hold_the_statement_alone(optical, lang):
     assert _text(page).count(title) == 1
     # the line under the results names U for what it is: no "Certified:" on the page
     assert "Certified:" not in _text(page)
+
+
+def _floor_p(p: float) -> str:
+    """A computed coverage probability as stated, worked out here: per cent, two
+    significant digits, rounded down (more decimals only where it rounds to 100)."""
+    for dec in range(0, 6):
+        v = math.floor(p * 100 * 10 ** dec) / 10 ** dec
+        if v < 100:
+            return f"{v:.{dec}f}"
+    raise AssertionError(p)
+
+
+@pytest.mark.parametrize("key", ["threshold", "resolution"])
+def test_a_computed_p_is_stated_the_same_everywhere(jjf, key):
+    u = jjf["res"]["items"][key]["uncertainty"]
+    p = u["coverage_probability"]
+    assert not math.isclose(p * 100, round(p * 100))     # a computed p, not a chosen one
+    text = _floor_p(p)
+    stated = f"p ≈ {text} %"
+    assert u["p_stated"] == stated
+    assert stated in u["u_c_of"] and "95 %" not in u["u_c_of"]
+    assert float(jjf["items"][key]["p"]) == pytest.approx(float(text) / 100, abs=1e-12)
+    line = next(ln for ln in jjf["summary"].splitlines()
+                if ln.strip().startswith(jjf["res"]["items"][key]["clause"]))
+    assert f"(p ≈ {text} %)" in line
+    assert f"(p ≈ {text} %)" in _text(_table(jjf["html"], "results"))
+    res_el = jjf["dcc"].find(f".//dcc:result[@id='result-{key}']", NS)
+    cp = res_el.find(".//si:coverageProbability", NS)
+    assert float(cp.text) == pytest.approx(float(text) / 100, abs=1e-12)
+
+
+def test_a_chosen_p_is_unchanged(jjf):
+    for key, it in jjf["res"]["items"].items():
+        u = it.get("uncertainty") or {}
+        if it["measured"] and u.get("coverage_probability") == 0.95:
+            assert u["p_stated"] == "p = 95 %", key
+            assert float(jjf["items"][key]["p"]) == 0.95, key

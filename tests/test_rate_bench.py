@@ -146,7 +146,8 @@ def test_jjf_results_json_shape(jjf_noise_off):
             # K_r, B_r and B_s are stated by their χ² interval, the magnitudes K_t, B_g and
             # B_t (a largest |x_i|) by the interval of the extreme of magnitudes
             assert set(it["uncertainty"]) - {"interval", "u_c_of"} == {
-                "components", "u_c", "U", "k", "nu_eff", "coverage_probability", "k_source"}
+                "components", "u_c", "U", "k", "nu_eff", "coverage_probability", "p_stated",
+                "k_source"}
             # an item stated by its interval alone says what its u_c is (and that U is not k·u_c)
             assert ("u_c_of" in it["uncertainty"]) == ("interval" in it["uncertainty"]), key
             assert ("interval" in it["uncertainty"]) == (key in (

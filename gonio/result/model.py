@@ -87,11 +87,32 @@ def normalise_row(row: dict) -> dict:
                       clause=r.pop("clause", "") or "", beyond_standard=bool(beyond), **r)
 
 
-#: results.json ``uncertainty.u_c_of`` of an item stated by its 95 % interval alone whose u_c
-#: is its value's own budget: U there is the interval's upper end − the value (the decision
-#: rule's guard band), so U/u_c is no coverage factor.
-U_C_OF_INTERVAL = ("the stated value, from its own budget; the 95 % interval is the statement "
+#: results.json ``uncertainty.u_c_of`` of an item stated by its interval alone whose u_c is
+#: its value's own budget: U there is the interval's upper end − the value (the decision
+#: rule's guard band), so U/u_c is no coverage factor. ``{p}`` is the interval's coverage
+#: probability as stated (:func:`p_stated`), filled by :func:`u_c_of_interval`.
+U_C_OF_INTERVAL = ("the stated value, from its own budget; the {p} interval is the statement "
                    "and U is its upper end minus the value, not k·u_c")
+
+
+def p_stated(p: float | None) -> str | None:
+    """A coverage probability as every output states it, "p = 95 %", "p ≈ 98 %":
+    :func:`gonio.result.statement.p_text` (a computed p rounded down) with its relation
+    (:func:`gonio.result.statement.p_relation`); results.json ``uncertainty.p_stated`` beside
+    the unrounded ``coverage_probability``. None without a p.
+
+    >>> p_stated(0.95), p_stated(0.9823487503232564), p_stated(0.99998), p_stated(None)
+    ('p = 95 %', 'p ≈ 98 %', 'p ≈ 99.998 %', None)
+    """
+    from gonio.result.statement import p_relation, p_text
+    t = p_text(p)
+    return None if t is None else f"p {p_relation(t)} {t} %"
+
+
+def u_c_of_interval(p: float | None) -> str:
+    """:data:`U_C_OF_INTERVAL` for an interval of coverage probability ``p`` (its
+    :func:`p_stated`; "p = 95 %" where none is given)."""
+    return U_C_OF_INTERVAL.format(p=p_stated(p) or p_stated(0.95))
 
 
 @dataclass
@@ -131,12 +152,12 @@ class Uncertainty:
     def to_json(self) -> dict:
         out = {"u_c": _f(self.u_c), "U": _f(self.U), "k": _f(self.k),
                "nu_eff": _f(self.nu_eff), "coverage_probability": _f(self.coverage_probability),
-               "k_source": self.k_source,
+               "p_stated": p_stated(self.coverage_probability), "k_source": self.k_source,
                "components": [normalise_row(c) for c in self.components]}
         if self.interval is not None:
             out["interval"] = [_f(self.interval[0]), _f(self.interval[1])]
             if self.k is None:      # stated by the interval: say what U and u_c are
-                out["u_c_of"] = self.u_c_of or U_C_OF_INTERVAL
+                out["u_c_of"] = self.u_c_of or u_c_of_interval(self.coverage_probability)
         if self.monte_carlo is not None:
             out["monte_carlo"] = json_safe(self.monte_carlo)
         return out
@@ -149,7 +170,8 @@ class Uncertainty:
         return cls(list(d.get("components") or []), d.get("u_c"), d.get("U"), d.get("k"),
                    d.get("nu_eff"), d.get("monte_carlo"), d.get("coverage_probability"),
                    d.get("k_source") or "", None if iv is None else (iv[0], iv[1]),
-                   d.get("u_c_of") if d.get("u_c_of") != U_C_OF_INTERVAL else None)
+                   d.get("u_c_of") if d.get("u_c_of") != u_c_of_interval(
+                       d.get("coverage_probability")) else None)
 
 
 @dataclass(frozen=True)

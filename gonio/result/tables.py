@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+from decimal import Decimal
 from pathlib import Path
 
 import pandas as pd
@@ -19,7 +20,7 @@ import pandas as pd
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.result.statement import (K_SOURCE_MAX_ABS, coverage_k, item_statement,
-                                    stated_nu)
+                                    p_text, stated_nu)
 
 ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "interval_low",
                 "interval_high", "measured", "conformity"]
@@ -32,6 +33,20 @@ def _k_from_nu(unc) -> bool:
     if k is None or p is None or not math.isfinite(float(k)):
         return False
     return math.isclose(float(k), coverage_k(unc.nu_eff, float(p)), rel_tol=1e-6)
+
+
+def stated_p(p: float | None) -> float | None:
+    """items.csv's ``p``: the coverage probability as every output states it
+    (:func:`~gonio.result.statement.p_text` / 100: a chosen p as chosen, 0.95, 0.9545; a
+    computed p rounded down at the digits stated, 0.9823… → 0.98, never overstated); the
+    unrounded value and the stated text with its relation ("p ≈ 98 %") are results.json's
+    ``uncertainty.coverage_probability`` and ``uncertainty.p_stated``.
+
+    >>> stated_p(0.95), stated_p(0.9545), stated_p(0.9823487503232564), stated_p(None)
+    (0.95, 0.9545, 0.98, None)
+    """
+    t = p_text(p)
+    return None if t is None else float(Decimal(t).scaleb(-2))
 
 
 def item_row(key: str, it) -> dict:
@@ -53,7 +68,8 @@ def item_row(key: str, it) -> dict:
       non-negative quantity whose estimate fell below zero, stated by its upper bound
       alone, has ``value`` empty, as the certificate states no value (the signed estimate
       stays in results.json).
-    A not-measured item has empty numbers."""
+    ``p`` is the coverage probability as stated (:func:`stated_p`), the unrounded one stays
+    in results.json. A not-measured item has empty numbers."""
     row = {"item": key, "clause": it.clause, "value": None, "unit": it.unit, "u": None,
            "U": None, "k": None, "nu": None, "p": None, "interval_low": None,
            "interval_high": None, "measured": bool(it.measured),
@@ -68,7 +84,7 @@ def item_row(key: str, it) -> dict:
         st = item_statement(it)
     except GonioError:          # unstateable items are reported not measured (run_items)
         st = None
-    row.update(u=unc.u_c, p=unc.coverage_probability)
+    row.update(u=unc.u_c, p=stated_p(unc.coverage_probability))
     if st is not None and st.interval is not None:
         if unc.interval is not None:
             lo, hi = float(unc.interval[0]), float(unc.interval[1])
