@@ -8,6 +8,8 @@ checked from the outside: the CLI's demo is run and every output it writes is pa
   The line under the table names U as what it is (each point's U), not "Certified".
 * A computed coverage probability (JJF 7.2.6/7.2.7) is the same p in the certificate,
   summary.txt, the DCC, items.csv and results.json (``p_stated``, ``u_c_of``), rounded down.
+* JJF 7.2.9's window W, block P and nominal stability are in the certificate, summary.txt
+  and the DCC, with the numbers results.json stores.
 """
 
 from __future__ import annotations
@@ -170,3 +172,35 @@ def test_a_chosen_p_is_unchanged(jjf):
         if it["measured"] and u.get("coverage_probability") == 0.95:
             assert u["p_stated"] == "p = 95 %", key
             assert float(jjf["items"][key]["p"]) == 0.95, key
+
+
+def test_warmup_conditions_in_every_output(jjf):
+    d = jjf["res"]["items"]["warmup_time"]["details"]
+    w, p, nominal = d["window_samples"], d["block_samples"], d["nominal_stability_dph"]
+    want = (f"W = {w} samples", f"P = {p} samples", f"nominal {nominal:g} °/h")
+    dcc_el = jjf["dcc"].find(".//dcc:result[@id='result-warmup_time']/dcc:description",
+                             NS)
+    assert dcc_el is not None
+    dcc_text = "".join(dcc_el.itertext())
+    summary = [ln for ln in jjf["summary"].splitlines() if "7.2.9" in ln and "W = " in ln]
+    assert len(summary) == 1
+    for text in (_text(jjf["html"]), dcc_text, summary[0]):
+        for part in want:
+            assert part in text, (part, text[:200])
+
+
+def test_warmup_conditions_in_the_zh_dcc(tmp_path):
+    """A zh DCC gives the sentence in Chinese beside the English, as the zh certificate."""
+    d = tmp_path / "zh"
+    assert main(["demo", "--spec", "jjf1535-2015", "--seed", "1", "--out", str(d),
+                 "--lang", "zh"]) == 0
+    res = json.loads((d / "results.json").read_text(encoding="utf-8"))
+    det = res["items"]["warmup_time"]["details"]
+    desc = etree.parse(str(d / "certificate.dcc.xml")).getroot().find(
+        ".//dcc:result[@id='result-warmup_time']/dcc:description", NS)
+    zh = [c.text for c in desc.findall("dcc:content", NS) if c.get("lang") == "zh"]
+    assert len(zh) == 1
+    for part in (f"W = {det['window_samples']} 个采样", f"P = {det['block_samples']} 个采样",
+                 f"标称值 {det['nominal_stability_dph']:g} °/h"):
+        assert part in zh[0], part
+        assert part in _text((d / "certificate.html").read_text(encoding="utf-8"))

@@ -14,6 +14,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.report.rate_certificate import write_rate_certificate
+from gonio.report.rate_content import item_conditions, spec_content
+from gonio.specs import get
 from gonio.result.tables import write_results
 
 #: The certificate content fields this renderer reads without a default (checked by
@@ -28,8 +30,15 @@ def results_json(result, lab: dict | None = None) -> dict:
 
 def summary(result, lab: dict | None = None) -> str:
     """The summary printed and written to ``summary.txt`` (``lab``: the laboratory file the
-    certificate is issued with)."""
-    return result.summary(lab)
+    certificate is issued with): the result's lines
+    (:meth:`~gonio.result.model.Result.summary`), then the sentences that define an item's
+    measurand as the certificate states them (:func:`gonio.report.rate_content.item_conditions`,
+    e.g. JJF 7.2.9's window W, block P and nominal stability)."""
+    text = result.summary(lab)
+    if result.spec_key and get(result.spec_key).certificate_content:
+        conditions = item_conditions(result.to_json(), spec_content(result.spec_key))
+        text += "".join(f"note: {t}\n" for _, t in conditions)
+    return text
 
 
 def item_titles(res: dict, lang: str = "en") -> dict[str, str]:
@@ -59,6 +68,6 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     the certificate (``dcc``: its DCC XML) of the stored ``result`` into ``out``: its
     conformity decisions rendered as the pipeline made them."""
     out = Path(out)
-    paths = write_results(result, out, lab)
+    paths = write_results(result, out, lab, summary(result, lab))
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc))
     return paths

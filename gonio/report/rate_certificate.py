@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import re
-import string
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
@@ -28,7 +27,7 @@ from gonio.report.render import Block, font_families, render_html, render_pdf_fi
 from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums
 from gonio.result.findings import stated_findings
 from gonio.result.statement import p_relation, unit_text
-from gonio.report.rate_content import rate_standards, spec_content
+from gonio.report.rate_content import item_conditions, rate_standards, spec_content
 from gonio.report.rate_figures import figures_of
 from gonio.specs import content_field, get
 
@@ -266,12 +265,8 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     # what defines an item's measurand: stated where the item was measured and its details
     # hold every field of the sentence (a record without noise has no fit to name; a result
     # stored before a field existed is rendered without that sentence)
-    for key, text in content_field(data, "ITEM_CONDITIONS").items():
-        it = res["items"].get(key) or {}
-        tmpl = text[1 if lang == "zh" else 0]
-        fields = {f for _, f, _, _ in string.Formatter().parse(tmpl) if f}
-        if it.get("measured") and fields <= set(it.get("details") or {}):
-            add("p", [tmpl.format(**it["details"])])
+    for _, text in item_conditions(res, data, lang):
+        add("p", [text])
     u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     legend = interval_legend(res["items"], L)    # stated by an interval: say what each is
@@ -351,6 +346,9 @@ def dcc_translator(result, content_fn):
     if heading:
         extra[heading[0]] = heading[1]
     extra.update(content_field(data, "READINGS_ZH"))
+    zh_conditions = dict(item_conditions(res, data, "zh"))   # the items' dcc:description
+    extra.update({en: zh_conditions[k] for k, en in item_conditions(res, data, "en")
+                  if k in zh_conditions})
     norm = content_field(data, "NORM")
     if norm:
         extra[norm[0]] = norm[1]

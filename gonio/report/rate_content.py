@@ -3,7 +3,9 @@ specification's certificate content (its groups and titles) and the standards us
 
 from __future__ import annotations
 
-from gonio.specs import get
+import string
+
+from gonio.specs import content_field, get
 
 
 def spec_content(spec_key: str):
@@ -20,3 +22,20 @@ def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -
     return [{"name": md.get("table", not_stated), "identifier": "",
              "accuracy": f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
              "certificate": "", "traceability": "none (virtual bench)" if lab is None else not_stated}]
+
+
+def item_conditions(res: dict, content, lang: str = "en") -> list[tuple[str, str]]:
+    """(item key, sentence) of every item whose measurand the specification's certificate
+    ``content`` defines in its ``ITEM_CONDITIONS`` (JJF 7.2.9's warm-up time: the window W,
+    the block P and the nominal stability), filled from the item's stored details in
+    ``lang`` ("en", "zh"): the certificate, summary.txt and the DCC state the same
+    sentences. An item not measured, or whose details lack a field of its sentence (a
+    result stored before the field existed), has none."""
+    out = []
+    for key, text in content_field(content, "ITEM_CONDITIONS").items():
+        it = res["items"].get(key) or {}
+        tmpl = text[1 if lang == "zh" else 0]
+        fields = {f for _, f, _, _ in string.Formatter().parse(tmpl) if f}
+        if it.get("measured") and fields <= set(it.get("details") or {}):
+            out.append((key, tmpl.format(**it["details"])))
+    return out

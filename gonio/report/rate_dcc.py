@@ -49,7 +49,7 @@ from gonio.report.dcc import (administrative_data, conformity_statements, enviro
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display, labels
-from gonio.report.rate_content import rate_standards, spec_content
+from gonio.report.rate_content import item_conditions, rate_standards, spec_content
 from gonio.report.stated import item_nums
 from gonio.result.statement import DSI_UNITS
 from gonio.specs import get
@@ -170,6 +170,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
     influence_conditions(mr, _conditions(res, lab))
     results = element(mr, "dcc:results")
     out_unit = str(md.get("output_unit", "output"))
+    conditions = dict(item_conditions(res, content))    # the certificate's sentences
     for _, group_en, _, keys in content.GROUPS:
         for key in keys:
             it = items.get(key)
@@ -177,6 +178,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                 continue
             r = element(results, "dcc:result", id=f"result-{key}")
             text_element(r, "dcc:name", f"{group_en}: {it['title']} ({it['clause']})")
+            if key in conditions:        # what defines the measurand (JJF 7.2.9: W, P, nominal)
+                text_element(r, "dcc:description", conditions[key])
             data = element(r, "dcc:data")
             name = f"{it['title']} ({spec.key} {it['clause']})"
             value = it["value"]

@@ -145,14 +145,16 @@ def results_json_text(result) -> str:
     return json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
 
 
-def write_results(result, out: str | Path, lab: dict | None = None) -> dict[str, Path]:
+def write_results(result, out: str | Path, lab: dict | None = None,
+                  summary: str | None = None) -> dict[str, Path]:
     """``results.json``, ``summary.txt`` and ``tables/*.csv`` of ``result`` into ``out``,
     swapped in together (:func:`gonio.atomic.output_dir`). Paths by name (``results``,
-    ``summary``, ``tables/<name>``)."""
+    ``summary``, ``tables/<name>``). ``summary``: the renderer's summary.txt text (None:
+    :meth:`~gonio.result.model.Result.summary` with ``lab``)."""
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "results.json", results_json_text(result))
-        write_text(stage / "summary.txt", result.summary(lab))
+        write_text(stage / "summary.txt", result.summary(lab) if summary is None else summary)
         tables = write_tables(result, stage)
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
     paths.update({n: out / n for n in tables})
