@@ -172,6 +172,26 @@ def named_files(spec, readings) -> list[Path]:
     return [Path(p) for p in spec.named_inputs(readings) if Path(p).is_file()]
 
 
+#: The calibrate options whose file carries the instrument's own data (a triad's thermal
+#: readings, a measured tilt): such a file is read for the calibration as a file the readings
+#: name is, so it goes through the same identity and provenance checks
+#: (:func:`instrument_files`). A rotary table's calibration (``table_calibration``) is the
+#: table's, checked against the laboratory's register instead.
+INSTRUMENT_FILE_OPTIONS = ("thermal", "tilt")
+
+
+def instrument_files(spec, readings, opts: dict) -> list[Path]:
+    """Every file read for a calibration that carries the instrument's own data: the files
+    the readings name (:func:`named_files`) and those an option gives
+    (:data:`INSTRUMENT_FILE_OPTIONS`: ``--thermal FILE``, ``--tilt FILE``) that exist (a
+    missing one is the option's own refusal). Each goes through :func:`check_identity` and
+    :func:`mark_provenance` alike, whichever way it came."""
+    given = [Path(v) for k, v in sorted(opts.items()) if k in INSTRUMENT_FILE_OPTIONS
+             and isinstance(v, (str, Path)) and str(v) and Path(v).is_file()]
+    named = named_files(spec, readings)
+    return named + [p for p in given if p.resolve() not in {n.resolve() for n in named}]
+
+
 def mark_provenance(result, readings, named=()) -> None:
     """Set ``result.provenance`` from the readings' own metadata and that of every file they
     name as part of their data (``named``; :func:`gonio.formats.provenance.readings_provenance`):
@@ -204,7 +224,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
-    named = named_files(spec, readings)
+    named = instrument_files(spec, readings, opts)     # named in the readings or by an option
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
                               else None, record=record,
                               named=named)                   # refused here, before the work

@@ -131,6 +131,8 @@ def record_contradictions(metadata: dict, lab: dict | None, record: dict | None)
 
 
 def _message(c: dict) -> str:
+    if c.get("message"):
+        return c["message"]
     tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
     where = c["key"] if "by" in c else f"# {c['key']}"
     return (f"{c['what']}: {c.get('by', 'the readings say')} {c['readings']} ({where}), "
@@ -161,6 +163,11 @@ def named_contradictions(metadata: dict, named: dict, lab: dict | None,
     out = []
     own = {"instrument": {key: v for _, _, key, md_keys in TEXT_FIELDS
                           for v in [_first(metadata, md_keys)[1]] if v}}
+    out += unstated_identity(named, [
+        (own["instrument"].get("serial"), f"{readings_name} says", "# serial"),
+        (str(((lab or {}).get("instrument") or {}).get("serial") or "").strip(),
+         "the laboratory file", "[instrument] serial"),
+        (str((record or {}).get("serial") or "").strip(), RECORD, "the records' serial")])
     for name, md in named.items():
         for other, of, lab_key in ((own, f"{readings_name} says", "# {k}"),
                                    ({**(lab or {}), "environment": {}}, "the laboratory file",
@@ -177,6 +184,39 @@ def named_contradictions(metadata: dict, named: dict, lab: dict | None,
                                 "of": of, "lab_key": lab_key.format(
                                     k=c["lab_key"].split(".")[-1])})
     return out
+
+
+#: what an unstated identity is called in a contradiction (:func:`unstated_identity`)
+UNSTATED = "identity not stated"
+
+
+def unstated_identity(named: dict, known) -> list[dict]:
+    """Each file read for the calibration that carries the instrument's own data (``named``:
+    {file name: its metadata}; a file the readings name, or one an option gives: a thermal
+    programme, a measured tilt, a static record) and states no serial (``# serial:``, or a
+    JSON result's ``metadata.serial``) while the instrument's serial is known (``known``:
+    (serial, who says it, where) of the readings, the laboratory file, the record; the
+    first stated): nothing ties the file to the instrument the certificate names, so it is
+    treated as a contradiction (refused, or stated on the certificate where the laboratory
+    file proceeds: :func:`check_identity`). Where no one states a serial there is nothing
+    to tie it to: nothing is said.
+
+    >>> [c["message"] for c in unstated_identity({"th.csv": {"kind": "thermal"}},
+    ...                                          [("T-1", "readings.csv says", "# serial")])]
+    ["identity not stated in th.csv: it carries the instrument's data and states no serial (# serial), readings.csv says 'T-1' (# serial)"]
+    >>> unstated_identity({"th.csv": {"serial": "T-1"}}, [("T-1", "r.csv says", "# serial")])
+    []
+    >>> unstated_identity({"th.csv": {}}, [(None, "r.csv says", "# serial"), ("", "lab", "x")])
+    []
+    """
+    serial, by, where = next(((v, b, w) for v, b, w in known if v), (None, None, None))
+    if not serial:
+        return []
+    return [{"what": "serial", "key": "# serial", "readings": "not stated", "lab": f"'{serial}'",
+             "lab_key": where, "tolerance": None, "by": f"{name} says", "of": by,
+             "message": f"{UNSTATED} in {name}: it carries the instrument's data and states no "
+                        f"serial (# serial), {by} '{serial}' ({where})"}
+            for name, md in named.items() if _first(md, ("serial",))[1] is None]
 
 
 def check_identity(readings, lab: dict | None, *, lab_file=None,
@@ -199,6 +239,11 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
         c = found[0]
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         where = f" ({lab_file})" if lab_file else ""
+        if c.get("message", "").startswith(UNSTATED):
+            raise GonioError(f"{_message(c)}{more}: nothing ties the file to the instrument "
+                             f"the laboratory file{where} or the readings name; state its serial "
+                             "(# serial:), or set [identity] on_mismatch = \"proceed\" to state "
+                             "it on the certificate", file=Path(readings).name)
         if c.get("of") == RECORD:
             named = f"the records and the laboratory file{where} name"
         elif "by" in c:

@@ -269,8 +269,9 @@ def lab_environment(details: dict) -> dict:
 
 
 def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | None,
-                    res_path: Path) -> None:
-    """The readings ``rd`` (and the files they name as part of their data) against the
+                    res_path: Path, option_paths=()) -> None:
+    """The readings ``rd`` (and the files they name as part of their data, and those an
+    option gave, ``option_paths``: ``--thermal FILE``, ``--tilt FILE``) against the
     laboratory file ``lab`` and the registered instrument's ``record`` as ``gonio calibrate``
     compares them
     (:func:`gonio.pipeline.identity.check_identity`): a contradiction is refused (one line)
@@ -281,6 +282,8 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
     from gonio.pipeline.identity import MISMATCH_CODE, check_identity
     from gonio.specs import get
     named = named_files(get(spec_key), rd)
+    named += [Path(p) for p in option_paths if Path(p).resolve() not in
+              {n.resolve() for n in named}]      # --thermal FILE, --tilt FILE: the same checks
     if lab is None and record is None and not named:
         return
     details = load_lab_file(lab, get(spec_key)) if lab is not None else None
@@ -686,7 +689,11 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
             services.check_readings_unused(s, str(source.get("sha256", "")))
         except GonioError as exc:
             raise GonioError(exc.message, file=rd, key=exc.key) from None
-    _check_identity(rd, lab, key, results, record, res_path)
+    from gonio.pipeline.dispatch import INSTRUMENT_FILE_OPTIONS
+    given = [p for option, _, p in option_inputs(get(key), check_manifest(folder), res_path, rd,
+                                                 option_files)
+             if option in INSTRUMENT_FILE_OPTIONS]   # checked like the files the readings name
+    _check_identity(rd, lab, key, results, record, res_path, given)
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
     psha = None

@@ -256,6 +256,13 @@ def add_tilt_estimate(subparsers) -> None:
     p.set_defaults(func=run_tilt_estimate)
 
 
+#: The readings' metadata a ``tilt-estimate --json`` result carries: the instrument's identity
+#: (compared by :func:`gonio.pipeline.identity.check_identity`) and where the readings came
+#: from (:func:`gonio.formats.provenance.provenance`).
+TILT_JSON_METADATA = ("serial", "model", "manufacturer", "gyro_type", "instrument", "bench",
+                      "seed", "noise", "generator")
+
+
 def run_tilt_estimate(args) -> int:
     """Read the file, estimate, print."""
     from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
@@ -264,7 +271,10 @@ def run_tilt_estimate(args) -> int:
     r = read_readings(args.file)
     e = tilt_estimate_from_readings(r, args.scale_factor, args.latitude_deg, args.u_latitude_deg)
     if args.json:
-        print(json.dumps(e.to_dict(), indent=2))
+        # the readings' identity and provenance travel with the result: a calibration given
+        # it (--tilt FILE) checks them as it checks its own readings'
+        md = {k: str(r.metadata[k]) for k in TILT_JSON_METADATA if str(r.metadata.get(k) or "")}
+        print(json.dumps({**e.to_dict(), "metadata": md}, indent=2))
         return 0
     print(f"in-situ tilt estimate: {e.n_positions} positions, axis {e.orientation}, "
           f"latitude {e.latitude_deg:g}°, Ω_⊥ = {e.perpendicular_arcsec_s:.4f}″/s")

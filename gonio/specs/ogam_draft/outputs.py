@@ -212,7 +212,8 @@ def _with_static_record_file(session, stage: Path):
     rec = session.static_record
     if rec is None or rec.counts is None:
         return session
-    write_text(Path(stage) / FILE_NAME, static_record_text(rec, ZERO_STABILITY_NOISE_SAMPLES))
+    write_text(Path(stage) / FILE_NAME, static_record_text(rec, ZERO_STABILITY_NOISE_SAMPLES,
+                                                            session.metadata))
     return dataclasses.replace(session, metadata={**session.metadata, METADATA_KEY: FILE_NAME})
 
 

@@ -47,7 +47,7 @@ def _number(v: float) -> str:
 
 
 def format_static_record(time_s, counts, *, nominal_scale_factor_counts_per_deg: float,
-                         source: str) -> str:
+                         source: str, identity: dict | None = None) -> str:
     """The exact text of a static record file: the counter ``counts`` at the times
     ``time_s`` over the 7.3 rest, with the nominal scale factor its angles are divided by
     (``angle_deg = gyro_counts / nominal``, as :class:`StaticRecord` holds them) and a
@@ -68,7 +68,12 @@ def format_static_record(time_s, counts, *, nominal_scale_factor_counts_per_deg:
     t, c = np.asarray(time_s, dtype=float), np.asarray(counts, dtype=float)
     lines = [f"# format: {FORMAT}", "# test: zero_stability",
              f"# nominal_scale_factor_counts_per_deg: {float(nominal_scale_factor_counts_per_deg)!r}",
-             f"# source: {' '.join(str(source).split())}", ",".join(COLUMNS)]
+             f"# source: {' '.join(str(source).split())}"]
+    # the instrument's identity and the readings' provenance (``identity``: the readings'
+    # serial, bench, seed…): the record is checked against the readings as they are
+    lines += [f"# {k}: {' '.join(str(v).split())}" for k, v in (identity or {}).items()
+              if str(v).strip()]
+    lines.append(",".join(COLUMNS))
     lines += [f"{_number(a)},{_number(b)}" for a, b in zip(t.tolist(), c.tolist())]
     return "\n".join(lines) + "\n"
 
@@ -158,7 +163,12 @@ def named_inputs(path) -> list:
 FILE_NAME = "static_record.csv"
 
 
-def static_record_text(record: StaticRecord, max_samples: int) -> str:
+#: The readings' metadata the demo's static record repeats (its identity and provenance).
+IDENTITY_KEYS = ("serial", "model", "manufacturer", "gyro_type", "bench", "seed", "generator")
+
+
+def static_record_text(record: StaticRecord, max_samples: int, identity: dict | None = None
+                       ) -> str:
     """The static record file of a virtual bench's ``record`` (its counter and nominal scale
     factor known), every d-th sample kept, d the smallest that leaves at most ``max_samples``
     (the counter is cumulative: that is an exact record at d·τ0; the noise analysis decimates
@@ -172,4 +182,5 @@ def static_record_text(record: StaticRecord, max_samples: int) -> str:
         f"{record.source}; one sample in {d} kept (at most {int(max_samples)})"
     return format_static_record(
         record.time_s[::d], record.counts[::d], source=source,
-        nominal_scale_factor_counts_per_deg=record.nominal_scale_factor_counts_per_deg)
+        nominal_scale_factor_counts_per_deg=record.nominal_scale_factor_counts_per_deg,
+        identity={k: identity[k] for k in IDENTITY_KEYS if (identity or {}).get(k)})
