@@ -65,29 +65,29 @@ def readings_metadata(path) -> dict[str, str]:
         from gonio.formats.streams import StreamFile
         return dict(StreamFile(path).metadata)
     if Path(path).suffix.lower() == ".json":
-        return json_metadata(path)
+        return json_metadata(path) or {}
     out: dict[str, str] = {}
     for key, value in header_lines(path):
         out.setdefault(key, value)
     return out
 
 
-def json_metadata(path) -> dict[str, str]:
+def json_metadata(path) -> dict[str, str] | None:
     """A JSON result's ``metadata`` object (a ``gonio tilt-estimate --json`` result: the
     identity and provenance of the readings it was computed from) as texts; {} where it has
-    none, or the file is not a JSON object (its reader refuses it in its own words).
+    none; None where the file is not JSON at all (its reader refuses it in its own words).
 
     >>> import tempfile, pathlib
     >>> d = pathlib.Path(tempfile.mkdtemp())
     >>> _ = (d / "t.json").write_text('{"tilt_deg": 0.04, "metadata": {"serial": "R-1", "seed": 7}}')
     >>> json_metadata(d / "t.json"), json_metadata(d / "r.json")
-    ({'serial': 'R-1', 'seed': '7'}, {})
+    ({'serial': 'R-1', 'seed': '7'}, None)
     """
     import json
     try:
         d = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError):
-        return {}
+        return None
     md = d.get("metadata") if isinstance(d, dict) else None
     if not isinstance(md, dict):
         return {}

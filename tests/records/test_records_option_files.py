@@ -26,7 +26,10 @@ from .conftest import SMALL_PROTOCOL
 from .test_records_record_refused import _where
 from .test_web_lab_file import n_calibrations
 
-TILT = json.dumps({"tilt_deg": 0.02, "U95_tilt_deg": 0.01}).encode()
+#: a tilt result states the instrument it was measured on (a file of the instrument's data
+#: that states no serial is refused: docs/formats.md, "Identity not stated")
+TILT = json.dumps({"tilt_deg": 0.02, "U95_tilt_deg": 0.01,
+                   "metadata": {"serial": "RLG-0001"}}).encode()
 NAME = "tilt estimate.json"                     # the user's name, with a space
 KEPT = f"option/tilt/{NAME}"
 SHA = hashlib.sha256(TILT).hexdigest()
