@@ -155,7 +155,8 @@ def test_power_on_interval_is_t_nu_times_u_for_normal_replicates():
 def test_power_on_dof_for_white_noise_alone():
     """Records without transient and white noise alone: u_c² scales with σ_y² (every
     replicate is σ_y times a fixed draw about the fitted records, which hold only the small
-    transient fitted to the noise), so σ_y²'s share of u_c² is ≈ 1 and ν_eff = 1/(1/ν_w + 1/(n_MC − 1)), ν_w = Σ(n − 2)/Σρ² of the
+    transient fitted to the noise), so σ_y²'s share of u_c² is ≈ 1 and
+    ν_eff = 1/(s_w²/ν_w + 1/(n_MC − 1)), ν_w = Σ(n − 2)/Σρ² of the
     second differences (ρ₁ = −2/3, ρ₂ = 1/6: Σρ² = 1 + 2(4/9 + 1/36) = 35/18), by
     Welch–Satterthwaite; the walk and flicker, absent, hold no share."""
     rng = np.random.default_rng(3)
@@ -173,4 +174,4 @@ def test_power_on_dof_for_white_noise_alone():
     assert shares == pytest.approx([1.0, 0.0, 0.0], abs=0.05)
     assert rep["white_dof"] == pytest.approx(nu_w)
     nu = I.power_on_dof(shares, [nu_w, 5.0, 5.0], I.POWER_ON_MC_TRIALS)
-    assert nu == pytest.approx(1.0 / (1.0 / nu_w + 1.0 / (I.POWER_ON_MC_TRIALS - 1)))
+    assert nu == pytest.approx(1.0 / (shares[0] ** 2 / nu_w + 1.0 / (I.POWER_ON_MC_TRIALS - 1)))
