@@ -160,10 +160,12 @@ def test_the_no_probability_note_says_what_the_rule_decides_on():
         notes["guarded"]
 
 
-def test_k_through_gonio_calibrate_with_a_simple_rule(tmp_path, capsys):
-    """From the outside: a simulated session, K read from its results.json, a laboratory file
-    with a simple-acceptance limit between the unrounded K and the printed K: the
-    certificate says fail, prints the limit as given and the printed K beside it."""
+def _k_limit_run(tmp_path, capsys, far_side: bool, lang: str = "en"):
+    """A simulated session calibrated twice: K read from the first results.json, then with a
+    laboratory file whose simple-acceptance limit lies between the unrounded and the printed
+    K (as the laboratory file's float reads it), on the printed value's side (the printed K
+    beyond it) or, ``far_side``, on the measured value's (the printed K inside it). Returns
+    (y, printed y, the limit, its side, conformity, the certificate's text)."""
     from gonio.cli import main
 
     proto = ROOT / "tests" / "data" / "small-protocol.toml"
@@ -173,54 +175,13 @@ def test_k_through_gonio_calibrate_with_a_simple_rule(tmp_path, capsys):
     assert main(["calibrate", str(rd), "--protocol", str(proto), "--out",
                  str(tmp_path / "a")]) == 0
     k = json.loads((tmp_path / "a" / "results.json").read_text())["items"]["scale_factor"]
-    y, U = k["value"], k["uncertainty"]["U"]
-    yp, Up = printed(y, U)
-    assert yp != Decimal(repr(y))
-    # between the unrounded and the printed K (as the laboratory file's float reads it)
-    mid = Decimal(repr(float((Decimal(repr(y)) + yp) / 2)))
-    assert min(Decimal(repr(y)), yp) < mid < max(Decimal(repr(y)), yp)
-    side = "upper" if yp > Decimal(repr(y)) else "lower"
-    other = ("lower", yp - 1) if side == "upper" else ("upper", yp + 1)
-    lab = (ROOT / "protocols" / "lab-example.toml").read_text()
-    lab = re.sub(r'\[decision_rule\]\nrule = "non-binary"\nguard_band_factor = 1.0',
-                 '[decision_rule]\nrule = "simple"', lab)
-    lab += (f'\n[[specification_limits]]\nitem = "scale_factor"\n{side} = {mid}\n'
-            f'{other[0]} = {other[1]}\nsource = "test"\n')
-    (tmp_path / "lab.toml").write_text(lab)
-    capsys.readouterr()
-    assert main(["calibrate", str(rd), "--protocol", str(proto), "--lab",
-                 str(tmp_path / "lab.toml"), "--out", str(tmp_path / "b")]) == 0
-    capsys.readouterr()
-    c = json.loads((tmp_path / "b" / "results.json").read_text())["items"]["scale_factor"][
-        "conformity"]
-    assert c["outcome"] == "fail" and c["value"] == float(yp)
-    assert c[f"acceptance_{side}_text"] == str(mid)
-    html = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
-                                      (tmp_path / "b" / "certificate.html").read_text()))
-    assert str(mid) in html and str(yp) in html
-
-
-@pytest.mark.parametrize("lang", ["en", "zh"])
-def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, capsys, lang):
-    """From the outside: a limit between the printed K and the unrounded K on the printed
-    value's side: the printed K lies inside, the measured K beyond: the certificate states
-    fail and its note names the measured value; results.json keeps it."""
-    from gonio.cli import main
-
-    proto = ROOT / "tests" / "data" / "small-protocol.toml"
-    assert main(["simulate", "--protocol", str(proto), "--seed", "2414", "--out",
-                 str(tmp_path / "sim")]) == 0
-    rd = tmp_path / "sim" / "readings.csv"
-    assert main(["calibrate", str(rd), "--protocol", str(proto), "--out",
-                 str(tmp_path / "a")]) == 0
-    k = json.loads((tmp_path / "a" / "results.json").read_text())["items"]["scale_factor"]
-    y, U = k["value"], k["uncertainty"]["U"]
-    yp, _ = printed(y, U)
+    y = k["value"]
+    yp, _ = printed(y, k["uncertainty"]["U"])
     yd = Decimal(repr(y))
     assert yp != yd
     mid = Decimal(repr(float((yd + yp) / 2)))
-    # the limit on the measured value's far side: the printed value passes, the measured not
-    side = "upper" if yd > yp else "lower"
+    assert min(yd, yp) < mid < max(yd, yp)
+    side = "upper" if (yd > yp if far_side else yp > yd) else "lower"
     other = ("lower", yp - 1) if side == "upper" else ("upper", yp + 1)
     lab = (ROOT / "protocols" / "lab-example.toml").read_text()
     lab = re.sub(r'\[decision_rule\]\nrule = "non-binary"\nguard_band_factor = 1.0',
@@ -234,10 +195,29 @@ def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, caps
     capsys.readouterr()
     c = json.loads((tmp_path / "b" / "results.json").read_text())["items"]["scale_factor"][
         "conformity"]
-    assert c["outcome"] == "fail" and c["value"] == float(yp)
-    assert c["decided_on_measured"] == f"{y:.10g}"
     html = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
                                       (tmp_path / "b" / "certificate.html").read_text()))
+    return y, yp, mid, side, c, html
+
+
+def test_k_through_gonio_calibrate_with_a_simple_rule(tmp_path, capsys):
+    """From the outside: a simulated session, K read from its results.json, a laboratory file
+    with a simple-acceptance limit between the unrounded K and the printed K: the
+    certificate says fail, prints the limit as given and the printed K beside it."""
+    _, yp, mid, side, c, html = _k_limit_run(tmp_path, capsys, far_side=False)
+    assert c["outcome"] == "fail" and c["value"] == float(yp)
+    assert c[f"acceptance_{side}_text"] == str(mid)
+    assert str(mid) in html and str(yp) in html
+
+
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, capsys, lang):
+    """From the outside: a limit between the printed K and the unrounded K on the measured
+    value's side: the printed K lies inside, the measured K beyond: the certificate states
+    fail and its note names the measured value; results.json keeps it."""
+    y, yp, _, _, c, html = _k_limit_run(tmp_path, capsys, far_side=True, lang=lang)
+    assert c["outcome"] == "fail" and c["value"] == float(yp)
+    assert c["decided_on_measured"] == f"{y:.10g}"
     assert f"{y:.10g}" in html
     assert ("Decided on the measured value before rounding" in html) == (lang == "en")
     assert ("按修约前的测得值判定" in html) == (lang == "zh")

@@ -335,15 +335,22 @@ def attach_of(args) -> dict:
     return out
 
 
+def _registering_user(store, args):
+    """The records user registering an entry (``--user`` or $GONIO_USER, password checked by
+    :func:`importing_user`); none given is refused in one line."""
+    actor = importing_user(store, args.user)
+    if actor is None:
+        raise GonioError("give the records user registering it (--user or $GONIO_USER)",
+                         key="--user")
+    return actor
+
+
 def run_add_standard(args) -> int:
     from gonio.records import services
 
     store = _store(args)
     try:
-        actor = importing_user(store, args.user)
-        if actor is None:
-            raise GonioError("give the records user registering it (--user or $GONIO_USER)",
-                             key="--user")
+        actor = _registering_user(store, args)
         st = services.add_standard(
             store, actor, name=args.name, identifier=args.identifier, due_on=args.due_on,
             calibrated_on=args.calibrated_on, accuracy=args.accuracy,
@@ -362,10 +369,7 @@ def run_register_table_calibration(args) -> int:
 
     store = _store(args)
     try:
-        actor = importing_user(store, args.user)
-        if actor is None:
-            raise GonioError("give the records user registering it (--user or $GONIO_USER)",
-                             key="--user")
+        actor = _registering_user(store, args)
         tc = services.register_table_calibration_file(
             store, actor, args.file, table=args.table, valid_from=args.valid_from,
             due_on=args.due_on, certificate=args.certificate)

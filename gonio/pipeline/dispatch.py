@@ -172,8 +172,8 @@ def named_files(spec, readings) -> list[Path]:
     return [Path(p) for p in spec.named_inputs(readings) if Path(p).is_file()]
 
 
-#: The calibrate options whose file carries the instrument's own data (a triad's thermal
-#: readings, a measured tilt): such a file is read for the calibration as a file the readings
+#: The calibrate options whose file carries the instrument's own data (thermal readings of
+#: the instrument, its measured tilt): such a file is read for the calibration as a file the readings
 #: name is, so it goes through the same identity and provenance checks
 #: (:func:`instrument_files`). A rotary table's calibration (``table_calibration``) is the
 #: table's, checked against the laboratory's register instead.
