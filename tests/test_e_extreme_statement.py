@@ -179,7 +179,9 @@ def test_decision_with_all_true_e_zero_never_passes_over_the_limit():
                 assert r.upper <= mpe + 1e-12
         # simple acceptance (shared risk, ILAC-G8 4.2.1) decides max|E_i| itself
         c = decide_items(res, [{"item": "angle_deviation", "mpe": mpe}], {"rule": "simple"})[0]
-        assert (c.outcome == "pass") == (c.value <= mpe)
+        # on the printed max|E_i| and, never less strict, on the measured one before rounding
+        assert (c.outcome == "pass") == (c.value <= mpe and r.estimate <= mpe)
+        assert (c.decided_on_measured is not None) == (c.value <= mpe < r.estimate)
         covered += r.lower <= 0.0 <= r.upper            # the truth max|E_i,true| = 0
         old_covered += r.estimate - 0.196 <= 0.0        # the draft's max|E_i| ± U
     assert passes > 0 and over > 0

@@ -639,7 +639,8 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     # bound alone (below zero) is its interval's lower end, as stated_interval_of takes it
     D = (lambda x: Decimal(repr(float(x))))  # noqa: E731
     raw_lo, raw_hi = (D(x) for x in unc.interval)
-    raw_v = raw_lo if v == lo and float(it.value) < float(unc.interval[0]) else D(it.value)
+    measured = abs(float(it.value)) if magnitude else float(it.value)   # E: max|E_i|
+    raw_v = raw_lo if v == lo and measured < float(unc.interval[0]) else D(measured)
     raw_outcome = outcome_of(raw_v, raw_lo, raw_hi)
     chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
         and math.isfinite(unc.nu_eff) and unc.nu_eff > 0

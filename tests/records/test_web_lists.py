@@ -60,10 +60,13 @@ def fleet(store, n: int, today: dt.date):
 
 def recalibrated_standard(store, name: str, first: tuple, second: tuple):
     """A standard registered with ``first`` (its certificate, calibrated on, due on) and
-    recalibrated with ``second``."""
+    recalibrated with ``second``. A ``first`` already past its due date is registered out of
+    service with its reason (the records refuse it otherwise), which the recalibration ends."""
     tech = services.user(store, "tech")
+    past = dt.date.fromisoformat(first[2]) < dt.date.today()
     std = services.add_standard(store, tech, name=name, identifier="RT-07",
-                                **dict(zip(("certificate", "calibrated_on", "due_on"), first)))
+                                **dict(zip(("certificate", "calibrated_on", "due_on"), first)),
+                                out_of_service="registered with its history" if past else "")
     services.update_standard(store, tech, std.id,
                              **dict(zip(("certificate", "calibrated_on", "due_on"), second)))
     return std
