@@ -24,19 +24,7 @@ from gonio.errors import GonioError
 __all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two_sided",
            "within", "binomial_u", "coverage", "wilson_interval", "ItemCoverage",
            "item_coverage", "spawn_seed", "chi_square_z", "stated_record",
-           "coverage_table_from", "format_coverage", "add_cases_option"]
-
-
-def add_cases_option(group) -> None:
-    """``gonio validate --cases``: one option every specification with study cases shares
-    (``Coverage.cases``; argparse takes it once, in the group of the first specification
-    that adds it). An unknown case is refused naming the known ones of ``--spec``."""
-    group.add_argument("--cases", default=None,
-                       help="comma-separated study cases of --spec, or 'all' (an unknown case "
-                            "is refused naming the known ones; each specification's cases "
-                            "and what each draws: docs/validation-optical.md, "
-                            "docs/validation-rate.md)")
-
+           "coverage_table_from", "format_coverage"]
 
 #: Wilson-interval coverage factor (95 %).
 _Z95 = 1.959963984540054

@@ -30,7 +30,7 @@ Allan deviation and its edf     :func:`allan_deviation`,
                                 :func:`averaging_factors`, :func:`edf_for`,
                                 :func:`chi2_interval`, :func:`noise_id_lag1`
 Coverage studies                :func:`spawn_seed`, :func:`two_sided`,
-                                :func:`coverage`, :func:`add_cases_option`
+                                :func:`coverage`
 Errors                          :class:`GonioError`
 ==============================  ==========================================================
 
@@ -40,7 +40,7 @@ file stays light; tests/test_kit.py checks it in a fresh interpreter).
 
 from __future__ import annotations
 
-from gonio.analysis.coverage import add_cases_option, coverage, spawn_seed, two_sided
+from gonio.analysis.coverage import coverage, spawn_seed, two_sided
 from gonio.analysis.noise import (AllanResult, allan_deviation, averaging_factors,
                                   chi2_interval, edf_for, hadamard_deviation,
                                   modified_allan_deviation, noise_id_lag1, total_deviation)
@@ -59,9 +59,8 @@ from uncertainty import InputQuantity, from_u, type_a, type_b
 __all__ = [
     "ACTIONS", "AllanResult", "CONTENT_FIELDS", "Coverage", "Covariance", "FIGURE_ROLES",
     "Finding", "GonioError", "ITEM_RENDERER", "InputQuantity", "Item", "ItemDef", "Result",
-    "Specification", "Statement", "Uncertainty", "add_cases_option", "allan_deviation",
-    "available", "averaging_factors", "budget_row", "calibrate_items", "chi2_interval",
-    "coverage",
+    "Specification", "Statement", "Uncertainty", "allan_deviation", "available",
+    "averaging_factors", "budget_row", "calibrate_items", "chi2_interval", "coverage",
     "edf_for", "from_u", "get", "gum", "hadamard_deviation", "item_order", "item_statement",
     "lazy", "modified_allan_deviation", "monte_carlo_validation", "noise_id_lag1",
     "not_measured", "set_aside", "spawn_seed", "state", "std_dev_uncertainty",
