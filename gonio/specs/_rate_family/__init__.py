@@ -64,11 +64,6 @@ STUDY_CASES = {
 def add_validate_options(group) -> None:
     """The rate specifications' ``gonio validate`` option: ``--cases`` (the study's cases,
     :data:`STUDY_CASES`; the same option as the optical draft's bench cases)."""
-    group.add_argument("--cases", default=None,
-                       help="comma-separated study cases of --spec, or 'all' (an unknown case is "
-                            "refused naming the known ones): ogam-draft's bench cases "
-                            "(default, tilt, ..., worst, worsttable; docs/validation-optical.md); "
-                            "jjf1535-2015's and iec62047-20's typeb (the default: the "
-                            "equipment's Type B errors drawn per trial) and worst (each at its "
-                            "bound, at the sign that moves the items most; judged on coverage, "
-                            "z sd information only; docs/validation-rate.md)")
+    from gonio.analysis.cases import add_cases_option
+
+    add_cases_option(group)

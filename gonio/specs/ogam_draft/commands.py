@@ -106,14 +106,9 @@ def add_validate_options(group) -> None:
     """The draft's own ``gonio validate`` options (``SPEC.arguments["validate"]``): the
     settings of its study of the Annex A budget of E over bench cases (7.1 + 7.4 with 10
     series; :func:`gonio.specs.ogam_draft.study.plan_study`)."""
-    group.add_argument("--cases", default=None,
-                       help="comma-separated study cases of --spec, or 'all' (an unknown case is "
-                            "refused naming the known ones): ogam-draft's bench cases "
-                            "(default, tilt, ..., worst, worsttable; docs/validation-optical.md); "
-                            "jjf1535-2015's and iec62047-20's typeb (the default: the "
-                            "equipment's Type B errors drawn per trial) and worst (each at its "
-                            "bound, at the sign that moves the items most; judged on coverage, "
-                            "z sd information only; docs/validation-rate.md)")
+    from gonio.analysis.cases import add_cases_option
+
+    add_cases_option(group)
     group.add_argument("--truth", default=None,
                        help="truth of the printed table (all are in the JSON; an unknown one "
                             "is refused naming the known ones)")
