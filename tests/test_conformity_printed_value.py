@@ -98,6 +98,21 @@ def test_the_reviewers_measured_value_beyond_the_limit_fails():
     assert c.outcome == "fail" and c.decided_on_measured == "76434.84649"
 
 
+def test_the_measured_value_prints_beyond_the_limit_it_lies_beyond():
+    """A measured value 76434.85092592593 beyond a lower limit 76434.85093 prints with the
+    digits that show it (10 significant digits would print the limit itself, and a value on a
+    limit passes simple acceptance); the text lies on the value's side of every limit."""
+    from gonio.analysis.conformity import measured_value_text
+    y, lim = 76434.85092592593, 76434.85093
+    assert f"{y:.10g}" == "76434.85093"            # the collision the rule avoids
+    m = measured_value_text(y, (lim, None, None))
+    assert float(m) < lim and Decimal(m) < Decimal(repr(lim))
+    for y, lims in ((1.0 + 3e-16, (1.0,)), (-2.5e-7, (-2.5000000001e-7, 0.0)),
+                    (123.456, (100.0, 200.0))):
+        m = measured_value_text(y, lims)
+        assert all((float(m) > L) == (y > L) and (float(m) < L) == (y < L) for L in lims), m
+
+
 def closed_form(rule: str, y: Decimal, w: Decimal, w_lo: Decimal, L: Decimal, H: Decimal) -> str:
     """ILAC-G8:09/2019 4.2.1–4.2.3 on one value y with guard bands w (upper), w_lo (lower)."""
     in_tol = L <= y <= H
@@ -191,7 +206,8 @@ def _k_limit_run(tmp_path, capsys, far_side: bool, lang: str = "en"):
     (tmp_path / "lab.toml").write_text(lab)
     capsys.readouterr()
     assert main(["calibrate", str(rd), "--protocol", str(proto), "--lab",
-                 str(tmp_path / "lab.toml"), "--lang", lang, "--out", str(tmp_path / "b")]) == 0
+                 str(tmp_path / "lab.toml"), "--lang", lang, "--dcc", "--out",
+                 str(tmp_path / "b")]) == 0
     capsys.readouterr()
     c = json.loads((tmp_path / "b" / "results.json").read_text())["items"]["scale_factor"][
         "conformity"]
@@ -215,9 +231,18 @@ def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, caps
     """From the outside: a limit between the printed K and the unrounded K on the measured
     value's side: the printed K lies inside, the measured K beyond: the certificate states
     fail and its note names the measured value; results.json keeps it."""
-    y, yp, _, _, c, html = _k_limit_run(tmp_path, capsys, far_side=True, lang=lang)
+    y, yp, _, side, c, html = _k_limit_run(tmp_path, capsys, far_side=True, lang=lang)
     assert c["outcome"] == "fail" and c["value"] == float(yp)
-    assert c["decided_on_measured"] == f"{y:.10g}"
-    assert f"{y:.10g}" in html
+    m = c["decided_on_measured"]
+    # printed with the digits that put it beyond the limit, as the measured value lies
+    lim = c.get("upper") if side == "upper" else c.get("lower")
+    assert (float(m) > lim) == (y > lim) and float(m) != lim and len(m) >= len(f"{y:.10g}")
+    assert m in html
+    # the same measured value in summary.txt and the DCC's statement and data
+    summary = (tmp_path / "b" / "summary.txt").read_text(encoding="utf-8")
+    assert f"decided on the measured value before rounding, {m}," in summary
+    dcc = (tmp_path / "b" / "certificate.dcc.xml").read_text(encoding="utf-8")
+    assert f"decided on the measured value before rounding, {m}," in dcc
+    assert "measured value before rounding (decided the outcome)" in dcc
     assert ("Decided on the measured value before rounding" in html) == (lang == "en")
     assert ("按修约前的测得值判定" in html) == (lang == "zh")

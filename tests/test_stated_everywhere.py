@@ -178,3 +178,35 @@ def test_a_decided_conformity_reaches_certificate_and_dcc(run, tmp_path):
     st = sts.find(f"dcc:statement[@id='conformity-{key}']", NS)
     assert st.find("dcc:conformity", NS).text == "pass"
     assert "rule guarded" in st.find("dcc:declaration/dcc:content", NS).text
+
+
+def test_a_measured_value_that_decided_reaches_the_dcc(run):
+    """A decision whose outcome the measured value before rounding decided
+    (``decided_on_measured``): the DCC's statement says so, with the same text summary.txt
+    prints, and carries that value as data in the item's D-SI unit."""
+    from gonio.report.dcc import conformity_statements, element, new_document
+    from gonio.report.i18n import labels
+    from gonio.result.text import measured_clause
+
+    items = json.loads(json.dumps(run["res"]["items"]))
+    key = next(k for k, it in items.items() if it["measured"] and it.get("uncertainty"))
+    it = items[key]
+    U = it["uncertainty"]["U"]
+    m = repr(float(it["value"]) + U / 1000.0)
+    items[key]["conformity"] = {
+        "item": key, "value": it["value"], "U": U, "k": it["uncertainty"]["k"], "lower": None,
+        "upper": float(m) - U / 2000.0, "rule": "simple", "acceptance_lower": None,
+        "acceptance_upper": float(m) - U / 2000.0, "outcome": "fail", "accepted": False,
+        "conformance_probability": None, "false_accept_probability": None,
+        "false_reject_probability": None, "decided_on_measured": m, "source": "test",
+        "limits_from": "lab file", "reason": ""}
+    root = new_document()
+    sts = element(root, "dcc:statements")
+    conformity_statements(sts, items, lambda k: items[k]["title"], lambda k: (r"\one", 2.0),
+                          labels("en"))
+    st = sts.find(f"dcc:statement[@id='conformity-{key}']", NS)
+    decl = st.find("dcc:declaration/dcc:content", NS).text
+    assert measured_clause(items[key]["conformity"]) in decl and m in decl
+    vals = [q.find(".//si:value", NS).text for q in st.findall("dcc:data/dcc:quantity", NS)
+            if "measured value before rounding" in q.find("dcc:name/dcc:content", NS).text]
+    assert vals == [repr(float(m) * 2.0)]

@@ -448,8 +448,8 @@ def stricter_of(printed: Conformity, measured: Conformity, value: float) -> Conf
     printed value above a printed limit never passes (the printed decision), and a measured
     value beyond a limit never passes because its printed value rounds back inside (the
     measured decision). Where the measured decision is the stricter, its outcome is stated
-    and ``decided_on_measured`` holds the measured value that decided it (10 significant
-    digits, the text every output prints),
+    and ``decided_on_measured`` holds the measured value that decided it
+    (:func:`measured_value_text`, the text every output prints),
     so that the certificate can say why a printed value inside the limit does not pass;
     everything else (acceptance limits, probabilities) stays the printed decision's.
 
@@ -468,12 +468,41 @@ def stricter_of(printed: Conformity, measured: Conformity, value: float) -> Conf
             or rank(measured.outcome) <= rank(printed.outcome)):
         return printed
     p_c = printed.conformance_probability
+    limits = (printed.lower, printed.upper, printed.acceptance_lower, printed.acceptance_upper,
+              measured.lower, measured.upper, measured.acceptance_lower,
+              measured.acceptance_upper)
     return replace(printed, outcome=measured.outcome, accepted=measured.accepted,
-                   decided_on_measured=f"{float(value):.10g}",
+                   decided_on_measured=measured_value_text(value, limits),
                    false_accept_probability=(None if not measured.accepted or p_c is None
                                              else 1.0 - p_c),
                    false_reject_probability=None if measured.accepted else p_c,
                    false_accept_bound=None)
+
+
+#: The fewest significant digits :func:`measured_value_text` prints.
+MEASURED_TEXT_MIN_DIGITS = 10
+
+
+def measured_value_text(value: float, limits) -> str:
+    """The measured value that decided an outcome (:func:`stricter_of`), as printed: at least
+    :data:`MEASURED_TEXT_MIN_DIGITS` significant digits, and as many more as it takes for the
+    printed text to lie on the same side of every given limit (tolerance and acceptance
+    limits; ``None`` ends skipped) as the value itself, so that a reader can check from the
+    certificate that the value lies beyond the limit (a value 76434.85092592593 beyond a limit
+    76434.85093 is never printed "76434.85093"). At 17 digits the text is the float's own.
+
+    >>> measured_value_text(76434.85092592593, (76434.85093, None))
+    '76434.850926'
+    >>> measured_value_text(76434.8464, (None, 76434.8462))
+    '76434.8464'
+    """
+    v = float(value)
+    ends = [float(x) for x in limits if x is not None and math.isfinite(float(x))]
+    for d in range(MEASURED_TEXT_MIN_DIGITS, 18):
+        t = f"{v:.{d}g}"
+        if all((float(t) > L) == (v > L) and (float(t) < L) == (v < L) for L in ends):
+            return t
+    return repr(v)
 
 
 def _acceptance_texts(a_lo: float | None, a_hi: float | None, bounds: Limits,

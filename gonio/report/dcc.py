@@ -223,10 +223,14 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
                      f"{t['outcome']}; rule {c.get('rule')}; limits {t['limits']}; {acc}; "
                      f"specific false-accept probability {pfa}"
                      + (f"; {t['pfr']}" if t["pfr"] else "")
-                     + f"; limits from: {c.get('source') or c.get('limits_from') or '—'}")
+                     + f"; limits from: {c.get('source') or c.get('limits_from') or '—'}"
+                     + (f"; {t['measured']}" if t["measured"] else ""))
         element(st, "dcc:conformity", DCC_CONFORMITY[c["outcome"]])
         data = element(st, "dcc:data")
         dsi, factor = dsi_of(key)
+        if c.get("decided_on_measured"):
+            quantity(data, "measured value before rounding (decided the outcome)",
+                     repr(float(c["decided_on_measured"]) * factor), "", dsi=dsi)
         for nm, v in (("lower specification limit", c.get("lower")),
                       ("upper specification limit", c.get("upper"))):
             if v is not None:

@@ -26,6 +26,7 @@ from typing import Any
 
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
+from gonio.result.text import measured_clause
 from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX, decimals_for_sig,
                                     given_text, round_half_up)
 
@@ -154,7 +155,8 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
                     if g("false_accept_bound") is not None else "—"),
             "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else "",
             "no_p": model if g("outcome") and g("conformance_probability") is None
-            and model.startswith("not given") else ""}
+            and model.startswith("not given") else "",
+            "measured": measured_clause(c)}
 
 
 #: the kinds of interval an item can be stated by, in the legend's order

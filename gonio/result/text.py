@@ -75,7 +75,29 @@ def conformity_text(c) -> str:
         # an interval not symmetric about its value: its own reach on each side
         gb = f", guard bands {band_text(c.guard_band_lower)} at the lower limit, " \
              f"{band_text(c.guard_band)} at the upper"
-    return f"{c.item}: limits {lims} ({c.rule}{gb}): {c.outcome}{pc}"
+    dm = measured_clause(c)
+    return f"{c.item}: limits {lims} ({c.rule}{gb}): {c.outcome}{pc}{'; ' + dm if dm else ''}"
+
+
+#: The clause summary.txt and the DCC add to a decision the measured value before rounding
+#: decided (:func:`gonio.analysis.conformity.stricter_of`; the certificate's note under the
+#: conformity table says the same, ``c_measured_note``).
+MEASURED_CLAUSE = ("decided on the measured value before rounding, {value}, which lies beyond "
+                   "the acceptance limit where the printed value does not")
+
+
+def measured_clause(c) -> str:
+    """:data:`MEASURED_CLAUSE` for a decision (a Conformity or its results.json dict) whose
+    outcome the measured value before rounding decided (``decided_on_measured``), else "".
+
+    >>> measured_clause({"decided_on_measured": "76434.850926"}).split(", which")[0]
+    'decided on the measured value before rounding, 76434.850926'
+    >>> measured_clause({"decided_on_measured": None})
+    ''
+    """
+    m = c.get("decided_on_measured") if isinstance(c, dict) else getattr(
+        c, "decided_on_measured", None)
+    return MEASURED_CLAUSE.format(value=m) if m else ""
 
 
 #: Where the certificate takes each identity subject's text from: (laboratory file section and

@@ -87,10 +87,14 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             text_element(st, "dcc:declaration",
                   f"{t['outcome']}; limits {t['limits']}; {acc}; "
                   f"specific false-accept probability {pfa}"
-                  + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
+                  + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}"
+                  + (f"; {t['measured']}" if t["measured"] else ""))
             element(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
             data = element(st, "dcc:data")
             unit = res["items"][e["item"]]["unit"]
+            if c.decided_on_measured:
+                quantity(data, "measured value before rounding (decided the outcome)",
+                         c.decided_on_measured, unit)
             for nm, v in (("lower specification limit", c.lower),
                           ("upper specification limit", c.upper)):
                 if v is not None:

@@ -551,7 +551,8 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         t = conformity_texts(c, res, L)
         acc, pfa = declaration_parts(c, t)
         lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
-                     f"rule {c.rule}, {acc}, specific false-accept probability {pfa})")
+                     f"rule {c.rule}, {acc}, specific false-accept probability {pfa})"
+                     + (f"; {t['measured']}" if t["measured"] else ""))
     band = band_note(res, conformity_for(res, lab), L) if lab else ""
     if band:
         lines.append(band)
