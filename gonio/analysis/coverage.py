@@ -162,7 +162,11 @@ def coverage(abs_err: np.ndarray, U: np.ndarray) -> dict:
 
     A NaN error is a reading the calibration set aside (its screening): it is no comparison
     (neither a hit nor a miss); the fractions are over the readings used, and
-    ``set_aside`` counts the others (the key only where there are any).
+    ``set_aside`` counts the others (the key only where there are any). So that a false
+    set-aside (a good reading screened out, or a miss hidden by screening) is visible, a
+    study with set-asides also reports them per point (``set_aside_per_point``) and the
+    coverage with each set-aside counted as a miss (``fraction_set_aside_as_miss``) and as a
+    hit (``fraction_set_aside_as_hit``): the coverage without them lies between.
 
     >>> c = coverage(np.array([[0.1, 0.5], [0.2, 0.1]]), np.array([0.3, 0.3]))
     >>> c["fraction"], c["n"], c["per_point"]
@@ -170,6 +174,8 @@ def coverage(abs_err: np.ndarray, U: np.ndarray) -> dict:
     >>> c = coverage(np.array([[0.1, np.nan], [0.2, 0.5]]), np.array([0.3, 0.3]))
     >>> round(c["fraction"], 4), c["n"], c["per_point"], c["set_aside"]
     (0.6667, 3, [1.0, 0.0], 1)
+    >>> c["set_aside_per_point"], c["fraction_set_aside_as_miss"], c["fraction_set_aside_as_hit"]
+    ([0, 1], 0.5, 0.75)
     """
     a = np.asarray(abs_err, dtype=float)
     u = np.asarray(U, dtype=float).reshape((-1,) + (1,) * (a.ndim - 1))
@@ -187,6 +193,10 @@ def coverage(abs_err: np.ndarray, U: np.ndarray) -> dict:
            "n": n, "per_point": [float(x) for x in per_point]}
     if n < a.size:
         out["set_aside"] = int(a.size - n)
+        out["set_aside_per_point"] = [int(x) for x in
+                                      (~used).reshape(-1, a.shape[-1]).sum(axis=0)]
+        out["fraction_set_aside_as_miss"] = float(hit.sum() / a.size)
+        out["fraction_set_aside_as_hit"] = float((hit.sum() + a.size - n) / a.size)
     return out
 
 

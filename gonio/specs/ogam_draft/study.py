@@ -1119,12 +1119,31 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += set_aside_lines(self.cases, truth)
         lines += [f"{c.name}: {condition_text(c.summary['condition'])}" for c in self.cases
                   if "condition" in c.summary]
         lines += item_coverage_lines(self.cases)
         lines += monte_carlo_lines(self.cases)
         return "\n".join(lines) + "\n"
 
+
+
+def set_aside_lines(cases, truth: str) -> list[str]:
+    """One line per case whose calibrations set readings aside: how many of the E_ij
+    comparisons (per point), and the coverage of E_ij with each set-aside counted as a miss
+    and as a hit (:func:`gonio.analysis.coverage.coverage`), so that a false set-aside, which
+    the coverage over the readings used cannot see, is visible."""
+    out = []
+    for c in cases:
+        cij = c.summary["annex_a"][truth]["coverage_E_ij"]
+        if not cij.get("set_aside"):
+            continue
+        out.append(f"{c.name}: E_ij set aside {cij['set_aside']} of "
+                   f"{cij['set_aside'] + cij['n']} (per point {cij['set_aside_per_point']}); "
+                   f"coverage without them {100 * cij['fraction']:.1f} %, counting them as "
+                   f"misses {100 * cij['fraction_set_aside_as_miss']:.1f} %, as hits "
+                   f"{100 * cij['fraction_set_aside_as_hit']:.1f} %")
+    return out
 
 
 #: The ``gonio validate`` options this study takes beyond the engine's (``SPEC.coverage.options``).
