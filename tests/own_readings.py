@@ -21,9 +21,10 @@ def own_metadata(md: dict) -> dict:
             for k, v in md.items() if k not in BENCH_KEYS}
 
 
-def own_text(text: str) -> str:
+def own_text(text: str, unmark: bool = True) -> str:
     """A readings file's text as a laboratory's own file (the metadata lines above the
-    header only)."""
+    header only); ``unmark``: its measured values also without the bench's watermark
+    (:func:`unmarked`), as a laboratory's own instrument would have recorded them."""
     out, head = [], True
     for line in text.splitlines(keepends=True):
         m = re.match(r"#\s*([A-Za-z_]\w*)\s*:", line) if head else None
@@ -33,4 +34,32 @@ def own_text(text: str) -> str:
         if m and m.group(1).lower() in NAME_KEYS and re.search(r"(?i)\bvirtual\b", line):
             line = f"# {m.group(1)}: {OWN_NAME}\n"
         out.append(line)
+    return unmarked("".join(out)) if unmark else "".join(out)
+
+
+def unmarked(text: str) -> str:
+    """``text`` with the last written digit of every other measured cell (by an unkeyed CRC
+    of its line) moved by one (9 → 8, else up): readings of the same values at the same
+    resolution, with the parities of a laboratory's own recording (not the bench's
+    watermark, gonio.formats.watermark)."""
+    import zlib
+
+    from gonio.formats.watermark import COLUMNS
+    out, header = [], None
+    for line in text.splitlines(keepends=True):
+        if line.startswith("#") or not line.strip() or '"' in line:
+            out.append(line)
+            continue
+        body = line.rstrip("\r\n")
+        cells = body.split(",")
+        if header is None:
+            header = cells
+            out.append(line)
+            continue
+        for j, name in enumerate(header):
+            if name in COLUMNS and j < len(cells) and re.fullmatch(r"-?\d+(\.\d+)?", cells[j]) \
+                    and zlib.crc32(f"{j}{body}".encode()) & 1:
+                d = int(cells[j][-1])
+                cells[j] = cells[j][:-1] + str(8 if d == 9 else d + 1)
+        out.append(",".join(cells) + line[len(body):])
     return "".join(out)

@@ -97,10 +97,13 @@ def printed_pages(page: Path) -> list[str]:
 LAB_OWN = "|".join(BENCH_KEYS)
 
 
-def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "") -> Path:
+def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "",
+                       unmark: bool = True) -> Path:
     """``gonio simulate`` then ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
     expression of metadata keys whose lines are deleted from the readings first
-    (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`)."""
+    (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`, its
+    values without the bench's watermark unless ``unmark`` is False: then the header lines
+    of the readings and of the files they name are edited alike, the watermark kept)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
     gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
@@ -109,10 +112,14 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
         readings = work / "lab-readings.csv"
         text = "".join(x for x in lines if not re.match(r"# (%s):" % strip, x))
-        readings.write_text(own_text(text) if strip == LAB_OWN else text, encoding="utf-8")
+        readings.write_text(own_text(text, unmark) if strip == LAB_OWN else text,
+                            encoding="utf-8")
         for extra in ("thermal.csv",):
-            if (sim / extra).exists():
+            if (sim / extra).exists() and unmark:
                 shutil.copy(sim / extra, work / extra)
+            elif (sim / extra).exists():
+                (work / extra).write_text(own_text((sim / extra).read_text(encoding="utf-8"),
+                                                   unmark), encoding="utf-8")
     gonio("calibrate", readings, "--spec", spec, *proto, "--lab", lab, "--dcc", "--out", cal,
           cwd=work)
     return cal
@@ -226,6 +233,36 @@ def test_laboratory_readings_are_not_marked(tmp_path):
     assert labels("en")["virtual"] not in (cal / "certificate.html").read_text(encoding="utf-8")
     assert "VIRTUAL" not in (cal / "summary.txt").read_text(encoding="utf-8")
     assert 'id="virtual-bench"' not in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
+def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, tmp_path):
+    """Simulated readings with every metadata line that names the bench deleted (bench, seed,
+    generator, noise) and every "virtual" name replaced, the file renamed: the values' own
+    watermark (gonio.formats.watermark) marks them virtual on every PDF page, in the HTML,
+    summary.txt, results.json and the DCC, for every specification."""
+    cal = simulate_calibrate(spec, protocol, seed, tmp_path,
+                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN,
+                             unmark=False)
+    lab_readings = (tmp_path / "lab-readings.csv").read_text(encoding="utf-8")
+    assert not re.search(r"(?im)^# (bench|seed|generator|noise):|virtual", lab_readings)
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    prov = res["provenance"]
+    assert prov["virtual"] is True and prov["bench"] is None, prov
+    assert prov["evidence"][-1].endswith("watermark"), prov
+    import jsonschema
+    schema = json.loads((ROOT / "docs" / "results.schema.json").read_text(encoding="utf-8"))
+    jsonschema.validate(res, schema)
+    pages = pdf_pages(cal / "certificate.pdf")
+    for i, text in enumerate(pages, 1):
+        assert BANNER in text, f"{spec}: PDF page {i} of {len(pages)} lacks the mark"
+    assert "watermark" in " ".join(pages[0].split())
+    page = (cal / "certificate.html").read_text(encoding="utf-8")
+    assert labels("en")["virtual"] in page and "watermark" in page
+    first = (cal / "summary.txt").read_text(encoding="utf-8").splitlines()[0]
+    assert first.startswith("VIRTUAL BENCH EXAMPLE") and "watermark" in first
+    dcc = (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    assert 'id="virtual-bench"' in dcc and "watermark" in dcc
 
 
 @pytest.mark.parametrize("spec, protocol", [("jjf1535-2015", "jjf1535-2015-small.toml"),

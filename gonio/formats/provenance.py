@@ -110,17 +110,41 @@ def readings_provenance(path, named=()) -> dict:
     >>> p["virtual"], p["seed"], p["evidence"]
     (True, '3', ['th.csv:bench', 'th.csv:seed'])
     """
-    out = provenance(readings_metadata(path))
+    out = file_provenance(path)
     if out["virtual"]:              # the readings say so themselves: their own evidence
         return out
     for other in named:
-        more = provenance(readings_metadata(other))
+        more = file_provenance(other)
         if not more["virtual"]:
             continue
         out = {**out, **{k: more[k] for k in ("bench", "seed", "generator") if not out.get(k)},
                "virtual": True,
                "evidence": [*out["evidence"], *(f"{Path(other).name}:{k}"
                                                 for k in more["evidence"])]}
+    return out
+
+
+def file_provenance(path) -> dict:
+    """:func:`provenance` of one file's metadata, made virtual also where its measured values
+    carry the virtual bench's watermark (:func:`gonio.formats.watermark.detect`: readings
+    whose ``#`` lines were deleted or edited, rows deleted or reordered, the file renamed);
+    ``evidence`` then names ``watermark`` and ``watermark`` holds the test (cells, matching,
+    p_value). The watermark is read only where the metadata do not already say virtual.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "r.csv").write_text(chr(10).join(["# serial: X", "t,output", "1,2.5", ""]))
+    >>> file_provenance(d / "r.csv")["virtual"]
+    False
+    """
+    out = provenance(readings_metadata(path))
+    if out["virtual"]:
+        return out
+    from gonio.formats.watermark import detect
+    wm = detect(path)
+    if wm["virtual"]:
+        out = {**out, "virtual": True, "evidence": [*out["evidence"], "watermark"],
+               "watermark": {k: wm[k] for k in ("cells", "matching", "p_value")}}
     return out
 
 
@@ -137,3 +161,28 @@ def result_provenance(res: Mapping) -> dict:
                             if not given.get(k)}, "virtual": True,
                 "evidence": sorted(set(given.get("evidence") or []) | set(from_md["evidence"]))}
     return given
+
+
+def metadata_evidence(prov: Mapping) -> list[str]:
+    """The metadata keys among a provenance's evidence (not the values' watermark)."""
+    return [k for k in prov.get("evidence") or [] if k.rsplit(":", 1)[-1] != "watermark"]
+
+
+def watermark_chance(p) -> str:
+    """The watermark test's tail probability as the notice prints it ("< 10⁻³⁰⁰" below
+    that).
+
+    >>> watermark_chance(7.45e-9), watermark_chance(0.0), watermark_chance(None)
+    ('7.5×10⁻⁹', '< 10⁻³⁰⁰', '?')
+    """
+    if p is None:
+        return "?"
+    if p <= 1e-300:
+        return "< 10⁻³⁰⁰"
+    import math
+    e = math.floor(math.log10(p))
+    m = p / 10 ** e
+    if round(m, 1) >= 10:
+        m, e = m / 10, e + 1
+    sup = str(e).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹"))
+    return f"{m:.1f}×10{sup}"

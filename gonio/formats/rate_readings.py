@@ -378,6 +378,11 @@ def write_rate_readings(data: pd.DataFrame, metadata: dict, path: str | Path) ->
 
     Floats are written with 12 significant digits (``%.12g``); NaN cells are empty.
     """
+    return write_text(path, rate_readings_text(data, metadata))
+
+
+def rate_readings_text(data: pd.DataFrame, metadata: dict) -> str:
+    """The text :func:`write_rate_readings` writes."""
     missing = [c for c in COLUMNS if c not in data]
     if missing:
         raise GonioError(f"cannot write rate readings without column(s) {', '.join(missing)}")
@@ -386,7 +391,7 @@ def write_rate_readings(data: pd.DataFrame, metadata: dict, path: str | Path) ->
     cells = pd.DataFrame({c: _float_cells(frame[c], "%.12g") if frame[c].dtype.kind == "f"
                           else frame[c] for c in COLUMNS}, index=frame.index)
     body = cells.to_csv(index=False, float_format="%.12g", lineterminator="\n", na_rep="")
-    return write_text(path, head + body)
+    return head + body
 
 
 def _float_cells(col: pd.Series, fmt: str) -> np.ndarray:

@@ -195,13 +195,13 @@ def instrument_files(spec, readings, opts: dict) -> list[Path]:
     return named + [p for p in given if p.resolve() not in {n.resolve() for n in named}]
 
 
-def mark_provenance(result, readings, named=()) -> None:
+def mark_provenance(result, readings, named=(), prov: dict | None = None) -> None:
     """Set ``result.provenance`` from the readings' own metadata and that of every file they
     name as part of their data (``named``; :func:`gonio.formats.provenance.readings_provenance`):
     readings from the virtual bench are marked virtual on every output whatever the
     laboratory file says, also where only a named file is the bench's; nothing turns it
-    off."""
-    result.provenance = readings_provenance(readings, named)
+    off. ``prov``: that provenance, read already (before the work)."""
+    result.provenance = readings_provenance(readings, named) if prov is None else prov
 
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
@@ -242,9 +242,11 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     gyro = ((lab_d or {}).get("instrument") or {}).get("gyro_type")
     if gyro and "gyro_type" in spec.calibrate_options:
         opts.setdefault("gyro_type", gyro)     # the instrument's type (the records' registered)
+    # read before the work: the metadata and the bench's watermark in the values
+    prov = readings_provenance(readings, named)
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
-    mark_provenance(result, readings, named)
+    mark_provenance(result, readings, named, prov)
     result.findings = (list(result.findings) + identity       # proceeding: stated as findings
                        + unread_columns(spec, readings))
     decide_conformity(result, lab_d)

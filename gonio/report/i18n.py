@@ -155,6 +155,13 @@ LABELS: dict[str, dict[str, str]] = {
                                "file says.",
                          "zh": "读数文件的元数据（{keys}）表明其来自虚拟台架：无论实验室文件如何"
                                "填写，所有输出均如此标明。"},
+    "virtual_watermark": {"en": "The readings' own values carry the virtual bench's watermark "
+                                "({cells} cells, chance on other readings {p}): every output "
+                                "says so, whatever their header lines or the laboratory file "
+                                "say.",
+                          "zh": "读数数值本身带有虚拟台架的水印（{cells} 个数据，非台架读数偶然"
+                                "吻合的概率 {p}）：无论文件头或实验室文件如何填写，所有输出均如此"
+                                "标明。"},
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
     # units as shown

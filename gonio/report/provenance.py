@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from gonio.formats.provenance import result_provenance
+from gonio.formats.provenance import metadata_evidence, result_provenance, watermark_chance
 
 
 def is_virtual(res: Mapping, lab: dict | None) -> bool:
@@ -25,9 +25,13 @@ def virtual_lines(res: Mapping, L: dict) -> list[str]:
     out = [L["virtual_note"]]
     if prov["virtual"] and prov["bench"] and prov["seed"]:
         out.append(L["virtual_source"].format(bench=prov["bench"], seed=prov["seed"]))
-    elif prov["virtual"]:                      # the bench's or the seed's line was deleted
-        keys = ", ".join(f"# {k}" for k in prov["evidence"])
+    elif prov["virtual"] and metadata_evidence(prov):   # the bench's or seed's line deleted
+        keys = ", ".join(f"# {k}" for k in metadata_evidence(prov))
         out.append(L["virtual_evidence"].format(keys=keys))
+    elif prov["virtual"]:                      # every bench line deleted: the values' watermark
+        wm = prov.get("watermark") or {}
+        out.append(L["virtual_watermark"].format(cells=wm.get("cells", "?"),
+                                                 p=watermark_chance(wm.get("p_value"))))
     return out
 
 

@@ -6,7 +6,7 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 
 from __future__ import annotations
 
-from gonio.formats.provenance import result_provenance
+from gonio.formats.provenance import metadata_evidence, result_provenance, watermark_chance
 from gonio.result.findings import identity_subjects
 from gonio.result.statement import decimals_for_sig, given_text, item_statement, round_half_up
 
@@ -16,6 +16,10 @@ VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the read
 #: ... where the bench's or the seed's line is missing: the metadata keys that say so.
 VIRTUAL_EVIDENCE_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings' "
                          "own metadata ({keys}) name the virtual bench")
+#: ... where every metadata line naming the bench is missing: the values' watermark.
+VIRTUAL_WATERMARK_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings' "
+                          "own values carry the virtual bench's watermark ({cells} cells, "
+                          "chance on other readings {p})")
 
 
 def virtual_line(res: dict) -> list[str]:
@@ -26,8 +30,12 @@ def virtual_line(res: dict) -> list[str]:
         return []
     if prov["bench"] and prov["seed"]:
         return [VIRTUAL_LINE.format(bench=prov["bench"], seed=prov["seed"])]
-    keys = ", ".join(f"# {k}" for k in prov["evidence"])     # the bench's or seed's line deleted
-    return [VIRTUAL_EVIDENCE_LINE.format(keys=keys)]
+    keys = ", ".join(f"# {k}" for k in metadata_evidence(prov))  # the bench's line deleted
+    if keys:
+        return [VIRTUAL_EVIDENCE_LINE.format(keys=keys)]
+    wm = prov.get("watermark") or {}            # every bench line deleted: the watermark
+    return [VIRTUAL_WATERMARK_LINE.format(cells=wm.get("cells", "?"),
+                                          p=watermark_chance(wm.get("p_value")))]
 
 
 def item_text(it) -> str:

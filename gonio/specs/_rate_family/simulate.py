@@ -15,7 +15,8 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.bench.rate_gyro import load_rate_bench
 from gonio.formats.jsonsafe import json_safe
-from gonio.formats.rate_readings import RateReadings, write_rate_readings
+from gonio.formats.rate_readings import RateReadings, rate_readings_text
+from gonio.formats.watermark import mark_text
 
 
 def write_simulation(run, out: Path, *, protocol, bench, seed: int = 0,
@@ -27,7 +28,8 @@ def write_simulation(run, out: Path, *, protocol, bench, seed: int = 0,
     res = run(b, protocol, seed, noise=noise)
     out = Path(out)
     with output_dir(out) as stage:
-        write_rate_readings(res.data, res.metadata, stage / "readings.csv")
+        # the bench's watermark in its measured values (gonio.formats.watermark)
+        write_text(stage / "readings.csv", mark_text(rate_readings_text(res.data, res.metadata)))
         write_text(stage / "truth.json", json.dumps(json_safe(res.truth), indent=2,
                                                     ensure_ascii=False, allow_nan=False) + "\n")
     return {"readings": out / "readings.csv", "truth": out / "truth.json"}

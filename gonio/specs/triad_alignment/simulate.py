@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from gonio.atomic import output_dir
+from gonio.formats.watermark import mark_text
 import numpy as np
 
 from gonio.specs.triad_alignment.bench import (load_triad_bench, load_triad_protocol, run_alignment_session,
@@ -29,8 +30,9 @@ def simulate(protocol: str = "triad-alignment", bench="mems-triad", seed: int = 
     if p.thermal.get("enabled"):
         th = run_thermal_session(p, b, seed)
         md["thermal_readings"] = "thermal.csv"     # the readings name their thermal programme
-        files["thermal.csv"] = format_triad_readings(th.readings, th.metadata)
-    files = {"readings.csv": format_triad_readings(al.readings, md), **files}
+        files["thermal.csv"] = mark_text(format_triad_readings(th.readings, th.metadata))
+    # the bench's watermark in its measured values (gonio.formats.watermark)
+    files = {"readings.csv": mark_text(format_triad_readings(al.readings, md)), **files}
     files["truth.json"] = json.dumps(al.truth, indent=2, sort_keys=True) + "\n"
     with output_dir(out) as stage:
         for name, text in files.items():

@@ -667,7 +667,8 @@ def write_session(result: SessionResult, out: str | Path, *,
     ...     print(e.message)
     readings.csv exists in the output folder; give force=True to replace it
     """
-    from gonio.specs.ogam_draft.readings import write_readings
+    from gonio.formats.watermark import mark_text
+    from gonio.specs.ogam_draft.readings import format_readings
 
     out = Path(out)
     if active_stage(out) is None:
@@ -678,7 +679,9 @@ def write_session(result: SessionResult, out: str | Path, *,
                     raise GonioError(f"{name} exists in the output folder; give force=True to "
                                      "replace it", file=out / name)
     with output_dir(out) as stage:
-        write_readings(result.readings, stage / "readings.csv", result.metadata)
+        # the bench's watermark in its measured values (gonio.formats.watermark)
+        write_text(stage / "readings.csv",
+                   mark_text(format_readings(result.readings, result.metadata)))
         write_text(stage / "truth.json", json.dumps(json_plain(result.truth), indent=2,
                                                     allow_nan=False) + "\n")
     return {"readings": out / "readings.csv", "truth": out / "truth.json"}

@@ -1,0 +1,177 @@
+"""The virtual bench's watermark in its readings' values (gonio.formats.watermark,
+docs/formats.md#watermark): every file ``gonio simulate`` writes carries it, for all four
+specifications; it survives deleting every ``#`` line, deleting and reordering rows and a
+renamed file; it moves no value by more than one unit of its last written digit; and
+readings not written by the bench (the repository's hand-made files, random real-looking
+readings, the bench's own readings perturbed by noise) are flagged at most at the test's
+stated level, checked against scipy.stats.binomtest.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from decimal import Decimal
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.stats import binomtest
+
+from gonio.formats.provenance import readings_provenance
+from gonio.formats.watermark import ALPHA, COLUMNS, MIN_CELLS, detect, detect_text, mark_text
+from tests.own_readings import own_text, unmarked
+
+HERE = Path(__file__).resolve().parent
+PINS = HERE / "data" / "pins"
+RUNS = (("ogam-draft", "ogam-draft-small.toml"), ("jjf1535-2015", "jjf1535-2015-small.toml"),
+        ("iec62047-20", "iec62047-20-small.toml"), ("triad-alignment", None))
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """{spec: folder} of one simulation per specification (seed 5), and a second run of
+    each to the same seed (determinism)."""
+    out = {}
+    for spec, proto in RUNS:
+        for run in ("a", "b"):
+            d = tmp_path_factory.mktemp(f"{spec}-{run}")
+            p = [] if proto is None else ["--protocol", str(PINS / proto)]
+            r = subprocess.run([sys.executable, "-m", "gonio", "simulate", "--spec", spec, *p,
+                                "--seed", "5", "--out", str(d / "sim")], capture_output=True,
+                               text=True)
+            assert r.returncode == 0, r.stderr
+            out[(spec, run)] = d / "sim"
+    return out
+
+
+def _data_lines(text: str) -> tuple[list[str], list[str]]:
+    lines = [x for x in text.splitlines(keepends=True) if not x.startswith("#")]
+    return lines[:1], lines[1:]
+
+
+@pytest.mark.parametrize("spec", [r[0] for r in RUNS])
+def test_marked_and_survives_edits(spec, simulated, tmp_path):
+    sim = simulated[(spec, "a")]
+    files = sorted(sim.glob("*.csv"))
+    assert files
+    for f in files:
+        text = f.read_text(encoding="utf-8")
+        a, b = simulated[(spec, "b")] / f.name, f
+        assert a.read_bytes() == b.read_bytes(), f"{spec}: same seed, other bytes ({f.name})"
+        full = detect(f)
+        assert full["virtual"] and full["matching"] == full["cells"] >= 27, (f.name, full)
+        head, rows = _data_lines(text)
+        rng = np.random.default_rng(11)
+        kept = [rows[i] for i in sorted(rng.choice(len(rows), size=max(MIN_CELLS, len(rows) * 3 // 4),
+                                                   replace=False))]
+        edited = "# serial: LAB-1\n" + "".join(head) + "".join(kept[::-1])   # rows reversed
+        moved = tmp_path / f"renamed-{f.stem}.txt"
+        moved.write_text(edited, encoding="utf-8")
+        got = detect(moved)
+        assert got["virtual"], (spec, f.name, got)
+        assert readings_provenance(moved)["evidence"] == ["watermark"]
+        # the laboratory's own recording of the same values (parities of its own)
+        assert not detect_text(unmarked(text))["virtual"]
+        assert not detect_text(own_text(text))["virtual"]
+        assert detect_text(own_text(text, unmark=False))["virtual"]
+
+
+def _cells(text: str):
+    head, rows = _data_lines(text)
+    header = head[0].rstrip("\n").split(",")
+    cols = [j for j, n in enumerate(header) if n in COLUMNS]
+    return [(r.rstrip("\n").split(",")[j]) for r in rows for j in cols]
+
+
+@pytest.mark.parametrize("spec", [r[0] for r in RUNS])
+def test_values_move_by_at_most_one_unit_of_the_last_digit(spec, simulated):
+    """Marking the laboratory-like recording of a simulated file again moves each measured
+    value by at most one unit of its last written digit (of the column's decimals where the
+    bench writes them padded), never any other cell; marking is idempotent."""
+    for f in sorted(simulated[(spec, "a")].glob("*.csv")):
+        text = f.read_text(encoding="utf-8")
+        assert mark_text(text) == text
+        plain = unmarked(text)
+        again = mark_text(plain)
+        assert detect_text(again)["virtual"]
+        before, after = _cells(plain), _cells(again)
+        assert len(before) == len(after)
+        moved = 0
+        for x, y in zip(before, after):
+            if x == "" or x == y:
+                continue
+            unit = Decimal(1).scaleb(Decimal(y.split("e")[0]).as_tuple().exponent)
+            assert abs(Decimal(x) - Decimal(y)) <= unit, (x, y)
+            moved += Decimal(x) != Decimal(y)
+        assert moved > 0
+        # the other columns are untouched
+        strip = [re.sub(r"[^,]*", "", x) for x in again.splitlines()]
+        assert strip == [re.sub(r"[^,]*", "", x) for x in plain.splitlines()]
+
+
+def test_real_files_are_not_flagged():
+    """The repository's hand-made and laboratory-style readings files: none is flagged."""
+    files = sorted((HERE / "data").glob("*.csv"))
+    assert len(files) >= 4
+    for f in files:
+        got = detect(f)
+        assert not got["virtual"], (f.name, got)
+
+
+def _lab_like(rng, n: int, resolution_decimals: int) -> str:
+    """A real-looking rate readings text: a bias record quantised to the output's
+    resolution, noise of a real gyro, and set points."""
+    head = "# serial: LAB-7\ntest,run,step,role,time_s,rate_dps,output\n"
+    out = 2501.5 + rng.normal(0.0, 0.2, n)
+    return head + "".join(f"bias,0,0,record,{600 + i},0,{o:.{resolution_decimals}f}\n"
+                          for i, o in enumerate(out))
+
+
+def test_false_positive_rate_on_real_looking_readings():
+    """400 real-looking files (random outputs at three resolutions, random constant columns):
+    none flagged, and the test's p-values are those of Binomial(n, 1/2) — the share below
+    0.05 is within a 99.9 % binomial interval of 5 % — checked by scipy.stats.binomtest."""
+    rng = np.random.default_rng(2026)
+    small = 0
+    trials = 400
+    for t in range(trials):
+        text = _lab_like(rng, int(rng.integers(30, 300)), int(rng.integers(0, 4)))
+        got = detect_text(text)
+        assert not got["virtual"], got
+        ref = binomtest(got["matching"], got["cells"], 0.5, alternative="greater").pvalue
+        assert got["p_value"] == pytest.approx(ref, rel=1e-9)
+        small += got["p_value"] <= 0.05
+    ci = binomtest(small, trials, 0.05).proportion_ci(0.999)
+    assert ci.low <= 0.05 <= ci.high or small / trials < 0.05, small
+    # a constant output (every value even) is no easier to flag
+    const = "t,output\n" + "".join(f"{i},2500.00\n" for i in range(500))
+    assert not detect_text(const)["virtual"]
+
+
+def test_perturbed_bench_readings_are_not_flagged(simulated):
+    """The bench's readings with a gyro's noise added to every measured value (normal,
+    sd 5 steps of the output's resolution, re-quantised): not flagged. (Noise of a step or
+    two keeps part of the mark — ±2 equiprobable steps leave 60 % matching — and is flagged:
+    such readings are still the bench's.)"""
+    rng = np.random.default_rng(8)
+    text = (simulated[("jjf1535-2015", "a")] / "readings.csv").read_text(encoding="utf-8")
+    head, rows = _data_lines(text)
+    header = head[0].rstrip("\n").split(",")
+    j = header.index("output")
+    noisy = []
+    for r in rows:
+        c = r.rstrip("\n").split(",")
+        if c[j]:
+            c[j] = f"{float(c[j]) + rng.normal(0.0, 0.05):.2f}"
+        noisy.append(",".join(c) + "\n")
+    got = detect_text("".join(head + noisy))
+    assert not got["virtual"] and got["cells"] > 1000, got
+
+
+def test_level_and_smallest_file():
+    """The level is the binomial test's: 20 matching cells of 20 reach it, 19 do not."""
+    assert binomtest(20, 20, 0.5, alternative="greater").pvalue <= ALPHA
+    assert binomtest(19, 19, 0.5, alternative="greater").pvalue > ALPHA
+    assert MIN_CELLS == 20
