@@ -911,10 +911,11 @@ def table_content(read_as) -> str:
     """The SHA-256 of what a table calibration file states, as its readers read it: every
     field of each reader's object (a dataclass: positions, errors, uncertainties,
     covariance, degrees of freedom…) but where it was read from
-    (:data:`TABLE_CONTENT_NOT_STATED`), numbers as float64 bytes. Two files that differ
-    only in their bytes (a line ending, a trailing blank, a comment, "0.10" for "0.1") have
-    one content: a withdrawn entry's content is not registered again under other bytes
-    (:func:`_refuse_withdrawn_bytes`).
+    (:data:`TABLE_CONTENT_NOT_STATED`), numbers as float64 bytes (−0.0 as 0.0), the rows in
+    one order (:func:`_rows_in_order`). Two files that differ only in their bytes (a line
+    ending, a trailing blank, a comment, "0.10" for "0.1", "-0.0" for "0.0", the same rows in
+    another order) have one content: a withdrawn entry's content is not registered again
+    under other bytes (:func:`_refuse_withdrawn_bytes`).
 
     >>> from dataclasses import dataclass
     >>> import numpy as np
@@ -936,22 +937,61 @@ def table_content(read_as) -> str:
     h = hashlib.sha256()
     for obj in read_as:
         fs = dataclasses.fields(obj) if dataclasses.is_dataclass(obj) else ()
+        values = {}
         for f in fs:
             if f.name in TABLE_CONTENT_NOT_STATED:
                 continue
             v = getattr(obj, f.name)
-            h.update(f.name.encode())
+            if v is not None and isinstance(v, (np.ndarray, list, tuple, int, float)) \
+                    and not isinstance(v, bool):
+                try:
+                    v = np.asarray(v, dtype=float) + 0.0       # -0.0 → 0.0
+                except (TypeError, ValueError):
+                    pass
+            values[f.name] = v
+        for name, v in _rows_in_order(values).items():
+            h.update(name.encode())
             if v is None:
                 h.update(b"\0none")
-            elif isinstance(v, (np.ndarray, list, tuple, int, float)) and not isinstance(
-                    v, bool):
-                try:
-                    h.update(np.asarray(v, dtype=float).tobytes())
-                except (TypeError, ValueError):
-                    h.update(repr(v).encode())
+            elif isinstance(v, np.ndarray) and v.dtype == float:
+                h.update(v.tobytes())
             else:
                 h.update(repr(v).encode())
     return h.hexdigest()
+
+
+def _rows_in_order(values: dict) -> dict:
+    """A read table calibration's fields with its rows in one order: the 1-D float arrays of
+    the first such array's length are its columns (a position and what the file states
+    there), sorted together by their values (the first column first); an n × n array (a
+    covariance between the rows) is permuted on both axes. A reader keeps rows in file order
+    and pairs each position with its own numbers, so two files that list the same rows in
+    another order state the same thing (:func:`table_content`).
+
+    >>> import numpy as np
+    >>> r = _rows_in_order({"deg": np.array([120.0, 0.0]), "e": np.array([0.01, 0.0]),
+    ...                     "cov": np.array([[1.0, 0.5], [0.5, 2.0]]), "n": 3})
+    >>> r["deg"].tolist(), r["e"].tolist(), r["cov"].tolist(), r["n"]
+    ([0.0, 120.0], [0.0, 0.01], [[2.0, 0.5], [0.5, 1.0]], 3)
+    """
+    import numpy as np
+
+    cols = [k for k, v in values.items() if isinstance(v, np.ndarray) and v.dtype == float
+            and v.ndim == 1 and v.size > 1]
+    if not cols:
+        return values
+    n = values[cols[0]].size
+    cols = [k for k in cols if values[k].size == n]
+    order = np.lexsort(tuple(values[k] for k in reversed(cols)))
+    out = dict(values)
+    for k, v in values.items():
+        if not (isinstance(v, np.ndarray) and v.dtype == float):
+            continue
+        if v.ndim == 1 and v.size == n:
+            out[k] = v[order]
+        elif v.ndim == 2 and v.shape == (n, n):
+            out[k] = v[np.ix_(order, order)]
+    return out
 
 
 def add_months(day: _dt.date, months: int) -> _dt.date:
@@ -1044,6 +1084,17 @@ def _governed(s: Session, st: Standard, start: _dt.date, sha256: str,
     return None
 
 
+def _same_identifier(text: str | None) -> str:
+    """A certificate identifier as compared with a withdrawn entry's
+    (:func:`_refuse_withdrawn_bytes`): case and runs of white space do not make another
+    certificate ("tc-1 " is TC-1).
+
+    >>> _same_identifier(" tc-1  a") == _same_identifier("TC-1 A")
+    True
+    """
+    return " ".join((text or "").split()).casefold()
+
+
 def _refuse_withdrawn_bytes(s: Session, store, sha256: str, content: str, *,
                             standard_id: int, valid_from: _dt.date, due_on: _dt.date,
                             certificate: str) -> None:
@@ -1052,8 +1103,8 @@ def _refuse_withdrawn_bytes(s: Session, store, sha256: str, content: str, *,
     same again would undo it alone. Refused: the same bytes (``sha256``), whatever else is
     stated; and a file that states the same numbers (``content``, :func:`table_content`: a
     line ending, a blank or a comment changed) registered for the same table, valid from the
-    same day, due the same day under the same certificate identifier, i.e. a registration
-    that corrects nothing. A correction takes the withdrawn entry's place: other numbers, or
+    same day, due the same day under the same certificate identifier (case and white space
+    aside, :func:`_same_identifier`), i.e. a registration that corrects nothing. A correction takes the withdrawn entry's place: other numbers, or
     the same numbers under corrected dates or identifier (docs/records.md, the register:
     withdrawn)."""
     entries = s.scalars(select(TableCalibration).order_by(TableCalibration.id)).all()
@@ -1063,8 +1114,8 @@ def _refuse_withdrawn_bytes(s: Session, store, sha256: str, content: str, *,
             continue
         if e.sha256 == sha256:
             what = "bytes are"
-        elif ((e.standard_id, e.valid_from, e.due_on, e.certificate or "")
-              == (standard_id, valid_from, due_on, certificate or "")):
+        elif ((e.standard_id, e.valid_from, e.due_on, _same_identifier(e.certificate))
+              == (standard_id, valid_from, due_on, _same_identifier(certificate))):
             try:
                 same = _readable_table_calibration(store, e.sha256, e.name) == content
             except GonioError:

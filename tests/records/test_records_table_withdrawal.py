@@ -497,15 +497,30 @@ def test_withdrawn_numbers_under_other_bytes_are_refused(store):
     raw = FILES["TC-1"]
     for variant in (raw + b"\n", raw.replace(b"\n", b"\r\n"),
                     raw.replace(b"# table certificate TC-1", b"# table certificate TC-1 again"),
-                    raw.replace(b"0,0.0,0.02", b"0,0.00,0.020")):
+                    raw.replace(b"0,0.0,0.02", b"0,0.00,0.020"),
+                    # the same rows in another order; a zero written "-0.0"
+                    _rows_swapped(raw), raw.replace(b"0,0.0,0.02", b"0,-0.0,0.02")):
         assert variant != raw
         with pytest.raises(GonioError) as e:
             reg(store, tech, table_id, "TC-1", *VALID["TC-1"], content=variant)
         msg = one_line(e)
         assert (f"is table calibration {tc.id} (TC-1), withdrawn on " in msg
                 and "numbers (as read), table, dates and certificate" in msg), msg
+    # the same numbers under the same certificate written in lower case
+    with pytest.raises(GonioError) as e:
+        reg(store, tech, table_id, "tc-1", *VALID["TC-1"], content=raw + b"\n")
+    assert "withdrawn on " in one_line(e)
     assert len(services.table_calibrations(store)) == 1
     # the same numbers, the due date corrected: registered (a correction of the entry)
     again = reg(store, tech, table_id, "TC-1", VALID["TC-1"][0], "2025-12-31",
                 content=raw + b"\n")
     assert again.id != tc.id and len(services.table_calibrations(store)) == 2
+
+
+def _rows_swapped(raw: bytes) -> bytes:
+    """``raw`` with its data rows (after the column header) in reverse order."""
+    lines = raw.splitlines(keepends=True)
+    head = next(i for i, ln in enumerate(lines) if ln.startswith(b"table_deg"))
+    rows = lines[head + 1:]
+    assert len(rows) >= 2
+    return b"".join(lines[:head + 1] + rows[::-1])
