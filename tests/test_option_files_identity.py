@@ -36,13 +36,18 @@ def run(*args) -> tuple[int, str]:
     return rc, err.getvalue()
 
 
-def without(path: Path, dst: Path, *prefixes, replace: dict | None = None) -> Path:
+def without(path: Path, dst: Path, *prefixes, replace: dict | None = None,
+            unmark: bool = False) -> Path:
+    """``path`` less its lines starting with ``prefixes``; ``unmark``: its values also without
+    the bench's watermark (a laboratory's own recording, tests/own_readings.unmarked)."""
+    from tests.own_readings import unmarked
+
     lines = [ln for ln in path.read_text().splitlines(keepends=True)
              if not ln.startswith(prefixes)]
     for k, v in (replace or {}).items():
         lines = [v if ln.startswith(k) else ln for ln in lines]
     dst.parent.mkdir(parents=True, exist_ok=True)
-    dst.write_text("".join(lines))
+    dst.write_text(unmarked("".join(lines)) if unmark else "".join(lines))
     return dst
 
 
@@ -86,7 +91,7 @@ def test_thermal_option_of_another_serial_is_refused(triad, tmp_path):
 
 def test_thermal_option_from_the_bench_marks_virtual(triad, tmp_path):
     rd = without(triad / "readings.csv", tmp_path / "t" / "readings.csv", "# thermal_readings:",
-                 "# bench:", "# seed:", "# generator:", "# instrument:")
+                 "# bench:", "# seed:", "# generator:", "# instrument:", unmark=True)
     assert main(["calibrate", str(rd), "--out", str(tmp_path / "plain")]) == 0
     plain = json.loads((tmp_path / "plain" / "results.json").read_text())
     assert plain["provenance"]["virtual"] is False       # nothing says bench: not virtual
@@ -134,7 +139,7 @@ def test_tilt_option_identity(optical, tmp_path):
     # readings that do not say virtual, a tilt result from the bench: virtual
     plain = without(readings, tmp_path / "r" / "readings.csv", "# bench:", "# seed:",
                     "# generator:", "# instrument:", "# manufacturer:", "# table:",
-                    "# operator:")
+                    "# operator:", unmark=True)
     assert main(["calibrate", str(plain), "--tilt", str(tilt), "--out",
                  str(tmp_path / "v")]) == 0
     res = json.loads((tmp_path / "v" / "results.json").read_text())
