@@ -7,7 +7,7 @@ trial seeds (``study.trial_seed(seed, case, i)``). For each session:
 * **clean**: the whole screening (``screen.screen``); every reading set aside or refused is
   a false finding (the bench wrote no typo);
 * **sweep** (the first ``--sweep-trials`` trials of each case): for each of 7.1, 7.3, 7.6 and
-  7.7 and each size (0.3″, 0.5″, 1″, 2″, 5″) one reading drawn at random is moved by the size
+  7.7 and each size (0.3″, 0.5″, 0.75″, 1″, 2″, 5″) one reading drawn at random is moved by the size
   (sign drawn; a whole number of counts for ``gyro_counts``, the size itself for
   ``gyro_deg``) and the indicated-angle rule is run on that test's readings and 7.4's
   reference (K_ref of the clean file; the condition rule's false-alarm probability shared
@@ -50,7 +50,7 @@ from gonio.specs.ogam_draft.study import (case_bench, study_bench, study_protoco
                                           trial_bench, trial_seed)
 from gonio.units import ARCSEC_PER_DEG
 
-SIZES = (0.3, 0.5, 1.0, 2.0, 5.0)
+SIZES = (0.3, 0.5, 0.75, 1.0, 2.0, 5.0)
 TESTS = ("scale_factor", "zero_stability", "rate_consistency", "pointing_consistency")
 
 

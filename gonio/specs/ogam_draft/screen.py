@@ -32,7 +32,13 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
     value of Student's t for the group's readings and s's degrees of freedom, so that a
     clean session sets aside a reading with probability ≤ ``SCREEN_ALPHA``
     (:func:`line_critical_value`), drift the draft's zero-stability bound times the
-    reading's time from zeroing (:func:`line_departures`);
+    reading's time from zeroing (:func:`line_departures`); where the condition is the
+    7.4 reference's own rate and axis (7.1: the same stops at 60 °/s, axis up, which
+    7.4/7.5 read ten times) s is pooled with the scatter of those ten repetitions
+    (:func:`repeated_reference_scale`, ν ≈ 108): a position's repeated error
+    (nonlinearity, table) cancels in d, a one-reading typo does not, and c falls from
+    ≈ 19 to ≈ 3.8; such a 7.1 reading is set aside and K rests on the other rounds
+    (``ROUND_MAY_GO``);
   * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
@@ -456,7 +462,7 @@ def line_critical_value(n_readings: int, dof: int, alpha: float = SCREEN_ALPHA) 
 
 
 def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: float = 0.0,
-                    drift_arcsec=None, alpha: float = SCREEN_ALPHA
+                    drift_arcsec=None, alpha: float = SCREEN_ALPHA, prior=None
                     ) -> list[tuple[int, float, float, float, float]]:
     """The condition rule of readings taken once per position (7.1, 7.6, 7.7): each
     reading against the least-squares model in the table angle θ that the condition's
@@ -486,6 +492,14 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
     runs again on the others while ``LINE_MIN`` − 1 remain. Returns (index, departure ″,
     threshold ″, s ″, c) of each reading set aside, in that order.
 
+    ``prior`` = (s₀ ″, ν₀): an independent estimate of the scale of one ``d`` with ν₀
+    degrees of freedom (7.1 against the repeated rounds of 7.4,
+    :func:`repeated_reference_scale`). s is then pooled, s² = (ν₀ s₀² + ν s_others²) /
+    (ν₀ + ν), with ν₀ + ν degrees of freedom in c, and ``scale_min_arcsec`` is not used
+    (it was the lower bound a 3-degree-of-freedom s needed): the deleted residual is
+    again Student's t, now with ~100 degrees of freedom, so c ≈ 3.8 instead of ≈ 19 and
+    a single-reading typo of 0.75″ stands out of a scatter of 0.1″.
+
     >>> x = np.arange(30.0, 361.0, 30.0)
     >>> d = 0.002 * x + np.array([0.1, -0.1, 0.0, 0.05, -0.05, 0.1, 0.0, -0.1, 0.05, 0.0,
     ...                           -0.05, 0.1])
@@ -512,7 +526,12 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
         _, j, rest, e, coef = best
         n, p, k = rest.size, X.shape[1], idx[j]
         dof = n - p
-        s = max(math.sqrt(float(e @ e) / dof), float(scale_min_arcsec))
+        if prior is None:
+            s = max(math.sqrt(float(e @ e) / dof), float(scale_min_arcsec))
+        else:
+            s0, nu0 = float(prior[0]), int(prior[1])
+            s = math.sqrt((nu0 * s0 * s0 + float(e @ e)) / (nu0 + dof))
+            dof += nu0
         h = float(X[k] @ np.linalg.pinv(X[rest].T @ X[rest]) @ X[k])
         dev = float(d[k] - X[k] @ coef)
         c = line_critical_value(idx.size, dof, alpha)
@@ -534,12 +553,13 @@ def allowed_drift_arcsec_per_s(protocol) -> float:
     return float(dph_to_arcsec_s(float(v))) if v else 0.0
 
 
-def reference_rounds(work: pd.DataFrame, protocol):
+def reference_rounds(work: pd.DataFrame, protocol, k_ref=None, deg_step: float = 0.0):
     """The reference condition's rounds (7.4 at its rate and orientation, every round read
     in at least ``PER_ROUND_MIN`` series): their table angles (median of ``table_deg``,
     °), the median of each round's r (″), the pooled scale s = 1.4826 · median of every
-    reading's |r − its round's median| (″) and the position tolerance; None where the
-    file has no such reference."""
+    reading's |r − its round's median| (″), the position tolerance and the scale of one
+    reading from the rounds' repetition (:func:`repeated_reference_scale`, ``k_ref`` and
+    ``deg_step`` giving the resolution); None where the file has no such reference."""
     it = getattr(protocol, "angle_deviation", None)
     if it is None:
         return None
@@ -554,33 +574,80 @@ def reference_rounds(work: pd.DataFrame, protocol):
     med = per["_r"].transform("median").to_numpy(float)
     return (per["table_deg"].median().to_numpy(float), per["_r"].median().to_numpy(float),
             1.4826 * float(np.median(np.abs(g["_r"].to_numpy(float) - med))),
-            float(it.position_tolerance_deg))
+            float(it.position_tolerance_deg),
+            repeated_reference_scale(g, _resolution_arcsec(g, k_ref, deg_step)
+                                     if "_col" in g else 0.0))
+
+
+def repeated_reference_scale(g: pd.DataFrame, step_arcsec: float = 0.0
+                             ) -> tuple[float, int, int]:
+    """The scale of one reading of the 7.4 reference condition, from its repetition (7.5:
+    7.4 repeated ten times): (s ″, ν, n) with s² = Σ (r − its round's mean)² / ν over the
+    rounds' readings, ν = N − R (N readings, R rounds), n the fewest readings of a round.
+    Readings that break the round-by-round rule (:func:`round_threshold_arcsec` with the
+    resolution ``step_arcsec``; a typo in 7.4, set aside by that rule) are left out, so one typo there does not widen it.
+
+    Why it bounds 7.1. 7.1's rounds turn the same table, at the same rate and axis, to
+    the same stops from the same zeroed start as 7.4's (both: 0° → 60°, …, 360° at
+    60 °/s); what differs is the reading delay (5 s against 10 s) and the time of day.
+    Everything a position repeats — the table's error at that stop (A.4.1, MPE 0.1″),
+    the instrument's nonlinearity, the tilt's elliptic error (A.4.2) — is the same in a
+    7.1 reading and in its 7.4 round; everything that changes from one turn to the next
+    (noise, the table's random part, the drift of A.4.3) is what the ten repetitions of
+    the round scatter by. So a 7.1 reading less its 7.4 round's median scatters by
+    s · √(1 + π/(2n)) (the median of n normal readings has variance ≈ π σ² / (2n)), known
+    from ν ≈ 100 degrees of freedom instead of the 3 of 7.1's own six positions
+    (:func:`line_departures`' ``prior``). A real nonlinearity repeats in every round of
+    7.4 and cancels; a typo lives in the one 7.1 reading and does not. Clean sessions
+    (seed 20261202, 85 built-in sessions, RLG and FOG): the 7.1 readings' residuals from
+    their line were at most 2.3 such s. The Bessel s, not the pooled 1.4826 · MAD, which
+    on the FOG's 0.0375″ steps read 0.074″ where the Bessel s was 0.12–0.13″."""
+    r = g["_r"].to_numpy(float)
+    rounds = g["round"].to_numpy()
+    med, thr = round_threshold_arcsec(r, rounds, step_arcsec)
+    keep = np.abs(r - med) <= thr
+    r, rounds = r[keep], rounds[keep]
+    ss, n_min, nu = 0.0, None, 0
+    for rd in np.unique(rounds):
+        x = r[rounds == rd]
+        ss += float(((x - x.mean()) ** 2).sum())
+        nu += x.size - 1
+        n_min = x.size if n_min is None else min(n_min, x.size)
+    return (math.sqrt(ss / nu) if nu > 0 else 0.0), int(nu), int(n_min or 0)
 
 
 def _line_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref, step: float, ref,
-                   drift_arcsec_per_s: float = 0.0, alpha: float = SCREEN_ALPHA
-                   ) -> list[Finding]:
+                   drift_arcsec_per_s: float = 0.0, alpha: float = SCREEN_ALPHA,
+                   reference_condition: bool = False) -> list[Finding]:
     """The readings of a condition read once per position that break the condition rule
     (:func:`line_departures`), one finding each. Where every reading's angle is a
     reference round's (``ref``, :func:`reference_rounds`), each is taken less that round's
     median (the position's own error, common to every rate and orientation) and the
-    scale is never below the reference's pooled one; ``alpha`` is the group's share of the session's false-alarm probability."""
+    scale is never below the reference's pooled one; ``alpha`` is the group's share of the
+    session's false-alarm probability. Where the condition is the reference's own rate and
+    axis (``reference_condition``: 7.1) the scale is the one the reference's repeated
+    rounds give (:func:`repeated_reference_scale`, pooled with the group's own)."""
     r = g["_r"].to_numpy(float)
     x = g["table_deg"].to_numpy(float)
-    d, s_min, less = r, 0.0, ""
+    d, s_min, less, prior = r, 0.0, "", None
     if ref is not None:
-        ang, med, s_ref, tol = ref
+        ang, med, s_ref, tol, (s_rep, nu_rep, n_rep) = ref
         j = np.abs(x[:, None] - ang[None, :]).argmin(axis=1)
         if np.all(np.abs(ang[j] - x) <= tol):
             d, s_min = r - med[j], s_ref
             less = ", each reading less the 7.4 reference round's median at its angle"
+            if reference_condition and nu_rep > 0 and n_rep > 0:
+                prior = (s_rep * math.sqrt(1.0 + math.pi / (2.0 * n_rep)), nu_rep)
+                less += (f", s pooled with the 7.4 rounds' repetition ({s_rep:.3g}″ a "
+                         f"reading, ν = {nu_rep})")
     drift = drift_arcsec_per_s * np.abs(g["time_s"].to_numpy(float))
     drift = np.where(np.isfinite(drift), drift, 0.0)
     found = [(i, f"the fit its condition's other readings draw{less}", dev, thr,
               f"; s = {s:.3g}″ of the others, drift allowed {drift[i]:.3g}″")
              for i, dev, thr, s, _ in line_departures(x, d, SPREAD_FLOOR_STEPS * step, s_min,
-                                                      drift, alpha)]
-    return _departures(g, found, what, file, test, _LINE_RULE, k_ref)
+                                                      drift, alpha, prior)]
+    return _departures(g, found, what, file, test,
+                       _LINE_RULE if prior is None else _REFERENCE_LINE_RULE, k_ref)
 
 
 _LINE_RULE = (f"|d − line(others)| > max(c · s · √(1 + h), {DRIFT_Z:g} · drift, "
@@ -591,6 +658,15 @@ _LINE_RULE = (f"|d − line(others)| > max(c · s · √(1 + h), {DRIFT_Z:g} · 
               "c = t_ν⁻¹(1 − α/(2m)) for the m readings judged, α = "
               f"{SCREEN_ALPHA:g} / the session's groups under this rule (Bonferroni); "
               "r = indicated − table angle, indicated = gyro_deg or gyro_counts / K_ref")
+
+
+_REFERENCE_LINE_RULE = (
+    _LINE_RULE + "; at the 7.4 reference's own rate and axis (7.1: the same stops, rate and "
+    "axis as 7.4, repeated ten times by 7.5) s² = (ν₀ s₀² + Σ residuals²) / (ν₀ + ν) and "
+    "c with ν₀ + ν, s₀ = s_rep · √(1 + π/(2n)), s_rep the Bessel standard deviation of the "
+    "7.4 readings about their round's mean (ν₀ = N − rounds, n readings a round): what a "
+    "position repeats (table error, nonlinearity) cancels in d, a typo in one reading does "
+    "not")
 
 
 def _group_rule(g: pd.DataFrame) -> str:
@@ -625,10 +701,10 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
     work = df.assign(_r=r, _col=col)
     work = work[np.isfinite(work["_r"]) & ~work["line"].isin(skip)]
     rot = work[work["test"].isin(ROTATION_TESTS)]
-    ref = reference_rounds(rot, protocol)
     drift_rate = allowed_drift_arcsec_per_s(protocol)
     deg_step = _deg_step(rot[rot["_col"] == "gyro_deg"]) if (rot["_col"] == "gyro_deg").any() \
         else 0.0
+    ref = reference_rounds(rot, protocol, k_ref, deg_step)
     out = []
     keys = ["test", "rate_dps", "orientation"]
     groups = list(rot.groupby(keys, sort=False))
@@ -643,7 +719,12 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
             out += _round_outliers(g, key[0], what, file, k_ref, step)
         elif how == "line":
-            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha)
+            it = getattr(protocol, "angle_deviation", None)
+            same = (it is not None and key[0] != "angle_deviation"
+                    and math.isclose(float(key[1]), float(it.rate_dps))
+                    and key[2] == it.orientation)
+            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha,
+                                  same)
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
@@ -1032,11 +1113,23 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     return found
 
 
+#: The tests whose item stands on the rounds left when a round's only reading is set aside
+#: by the repeated-reference rule (``_REFERENCE_LINE_RULE``: the reading disagrees with the
+#: ten 7.4 readings of the same stop, rate and axis, so the position itself is known): 7.1's
+#: K is the mean of the rounds' K_i (each an estimate of K by itself) and K_l their range,
+#: so the item is computed on the other rounds, the ``incomplete-programme`` finding saying
+#: on how many (certificate, results.json). A reading set aside by any other rule (no
+#: repeated reference: the position is known from nothing else), and every round of 7.4
+#: (E is the largest |E_i|: a point lost could be the largest), 7.6 and 7.7 (compared over
+#: the same positions), refuse instead.
+ROUND_MAY_GO: tuple[str, ...] = ("scale_factor",)
+
+
 def apply_findings(readings: Readings, findings: list[Finding], protocol=None
                    ) -> tuple[Readings, pd.DataFrame]:
     """The readings kept and the DataFrame of those set aside (line, test, series, round,
     rate_dps, orientation, reason); a refused reading, or setting aside the last reading of
-    a round, raises a GonioError naming the line."""
+    a round (except in ``ROUND_MAY_GO``), raises a GonioError naming the line."""
     df = readings.data
     for f in findings:
         if f.action == "refused":
@@ -1064,7 +1157,8 @@ def apply_findings(readings: Readings, findings: list[Finding], protocol=None
                     & (left["orientation"] == row["orientation"])
                     & ((left["rate_dps"] == row["rate_dps"])
                        | (left["rate_dps"].isna() & pd.isna(row["rate_dps"])))]
-        if row["test"] in ROTATION_TESTS and not len(same):
+        may_go = row["test"] in ROUND_MAY_GO and f.rule == _REFERENCE_LINE_RULE
+        if row["test"] in ROTATION_TESTS and not may_go and not len(same):
             # the why first: a long finding is cut on the command line's one line
             raise GonioError(f"{CLAUSES.get(row['test'], '')} reading set aside, and no other "
                              f"reading of its round is left: the item cannot stand without "
