@@ -115,14 +115,21 @@ def test_clean_7_3_rest_is_never_set_aside_and_a_typo_in_any_reading_is(case):
     files = 0
     for rd, proto in _zero_stability_files(case, 20261129, 12):
         files += 1
-        assert [f.message for f in screen(rd, proto)] == []
+        # 7.3 is this test's subject; the protocol without 7.6/7.7 leaves 7.1 the session's
+        # only group under the condition rule, so it alone carries the stated 2 % a session
+        # (tests/test_ogam_71_repeated_reference.py): a 7.1 reading found is that rule's,
+        # and is excluded from the 7.3 check below, as the 7.3 typo is from it
+        base = screen(rd, proto)
+        assert [f.message for f in base if f.clause != "7.1"] == []
+        other = {(f.line, f.clause) for f in base}
         zs = np.flatnonzero((rd.data["test"] == "zero_stability").to_numpy())
         assert zs.size == 15
         for pos in zs:
             for sign in (1, -1):
                 df = rd.data.copy()
                 df.loc[pos, "gyro_counts"] += sign * step
-                found = [(f.line, f.clause) for f in screen(Readings(df, rd.metadata), proto)]
+                found = [(f.line, f.clause) for f in screen(Readings(df, rd.metadata), proto)
+                         if (f.line, f.clause) not in other]
                 want = [(int(df.loc[pos, "line"]), "7.3")]
                 if case == "drift" and pos in (zs[0], zs[-1]):
                     # an end is extrapolated (four times an inner residual's variance) and
