@@ -30,7 +30,12 @@ def simulated(tmp_path_factory):
 @pytest.mark.parametrize("spec", SPECS)
 @pytest.mark.parametrize("line,key", [("# humidity_pct: 45 %RH", "humidity_pct"),
                                       ("# temperature_c: twenty", "temperature_c"),
-                                      ("# humidity_pct: 140", "humidity_pct")])
+                                      ("# humidity_pct: 140", "humidity_pct"),
+                                      # digits of other scripts, an underscore: float() takes
+                                      # them, a certificate and a DCC cannot state them
+                                      ("# humidity_pct: \uff14\uff15", "humidity_pct"),
+                                      ("# humidity_pct: \u0664\u0665", "humidity_pct"),
+                                      ("# temperature_c: 2_0", "temperature_c")])
 def test_environment_text_refused(simulated, spec, line, key, capsys):
     folder = simulated / spec
     bad = folder / "bad.csv"

@@ -48,6 +48,7 @@ import pandas as pd
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
+from gonio.formats.metadata import parse_number
 
 COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                             "temperature_c", "supply_v", "up_axis", "north_axis",
@@ -113,11 +114,14 @@ class RateReadings:
     path: Path | None = None
 
 def _meta_number(key: str, v: str, path) -> float:
-    try:
-        x = float(v)
-    except ValueError:
+    """A numeric metadata value: a plain number of ASCII digits only (the optical reader's
+    :func:`gonio.formats.metadata.parse_number`: Python's ``float`` also takes "４５", "٤٥"
+    and "4_5", which a certificate would print as written and a DCC cannot state), within
+    its range; else one line naming the key."""
+    x = parse_number(v.strip())
+    if x is None:
         raise GonioError(f"expected {NUMERIC_METADATA.get(key, 'a number')}, got {v!r}",
-                         file=path, key=key) from None
+                         file=path, key=key)
     lo, hi, _ = META_RANGES.get(key, (-math.inf, math.inf, ""))
     bad = not math.isfinite(x) or not lo <= x <= hi or (key == "nominal_scale_factor" and x == 0)
     if bad:

@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError, check_header, read_utf8
-from gonio.formats.metadata import metadata_block, named_files
+from gonio.formats.metadata import metadata_block, named_files, parse_number
 
 FORMAT = "gonio-triad-readings/1"
 TESTS = ("alignment", "static", "thermal")
@@ -124,12 +124,11 @@ def _num(text: str, *, file, line, column, allow_empty: bool) -> float:
 
 
 def _check_number(meta: dict, key: str, ok, expect: str, file) -> None:
-    """A numeric metadata value: finite and accepted by ``ok``, else a one-line error."""
-    try:
-        v = float(meta[key])
-    except ValueError:
-        raise GonioError(f"expected {expect}, got {meta[key]!r}", file=file, key=key) from None
-    if not (math.isfinite(v) and ok(v)):
+    """A numeric metadata value: a plain number of ASCII digits (``parse_number``; "４５" or
+    "4_5", which ``float`` takes, a certificate and a DCC cannot state), finite and accepted
+    by ``ok``, else a one-line error."""
+    v = parse_number(str(meta[key]).strip())
+    if v is None or not (math.isfinite(v) and ok(v)):
         raise GonioError(f"expected {expect}, got {meta[key]!r}", file=file, key=key)
 
 
