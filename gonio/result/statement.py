@@ -332,6 +332,12 @@ def p_text(p: float | None) -> str | None:
 
     >>> p_text(0.95999), p_text(0.9545001), p_text(0.9587), p_relation(p_text(0.95999))
     ('95.9', '95.4', '95.8', '≈')
+
+    A computed p within :data:`P_TEXT_MAX_DECIMALS` decimals above a chosen one keeps its
+    zeros, so that it is not read as chosen either:
+
+    >>> p_text(0.950001), p_relation(p_text(0.950001)), p_text(0.9500004)
+    ('95.000', '≈', '95.000')
     """
     if p is None or not math.isfinite(float(p)):
         return None
@@ -354,6 +360,8 @@ def p_text(p: float | None) -> str | None:
     while s in CHOSEN_P_TEXTS and d < P_TEXT_MAX_DECIMALS:
         d += 1                      # a computed p is never printed as a chosen one
         s = at(d)
+    if s in CHOSEN_P_TEXTS:         # just above a chosen p at every decimal shown: the zeros
+        s = round_half_up(v, d, rounding=ROUND_FLOOR)       # say it was computed ("95.000")
     return s
 
 
