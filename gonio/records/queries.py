@@ -480,9 +480,10 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                   i.interval_months, i.retired_on, i.gyro_type] for i in rows])
     if name == "standards":
         return (["id", "name", "identifier", "accuracy", "certificate", "traceability",
-                 "calibrated_on", "due_on", "retired_on"],
+                 "calibrated_on", "due_on", "retired_on", "out_of_service"],
                 [[x.id, x.name, x.identifier, x.accuracy, x.certificate, x.traceability,
-                  x.calibrated_on, x.due_on, x.retired_on] for x in standards(store)])
+                  x.calibrated_on, x.due_on, x.retired_on, x.out_of_service or ""]
+                 for x in standards(store)])
     if name == "calibrations":
         rows, _ = calibrations(store, 1, big, params.get("status", ""))
         return (["id", "customer", "instrument_serial", "specification", "performed_on",

@@ -33,7 +33,13 @@ def test_lists_exported_as_csv(app, sqlite_store):  # noqa: F811
     inst = rows_of(web.get("/export/instruments.csv"))
     assert inst[0][-1] == "gyro_type"                # appended: earlier columns keep their place
     assert {r[5]: r[-1] for r in inst[1:]} == {"S-1": "", "S-2": "fog"}
-    assert rows_of(web.get("/export/standards.csv"))[1][7] == "2030-01-01"
+    services.add_standard(sqlite_store, tech, name="old level", identifier="L-1",
+                          due_on="2020-01-01", out_of_service="overdue, kept for its history")
+    std = rows_of(web.get("/export/standards.csv"))
+    assert {r[2]: r[7] for r in std[1:]}["T-1"] == "2030-01-01"
+    # a standard registered out of service exports with its reason (appended column)
+    assert std[0][-1] == "out_of_service"
+    assert {r[2]: r[-1] for r in std[1:]} == {"T-1": "", "L-1": "overdue, kept for its history"}
     for name in ("calibrations", "certificates", "due"):
         assert len(rows_of(web.get(f"/export/{name}.csv"))) == 1, name    # the header
     assert web.get("/export/nothing.csv").status_code == 404
