@@ -204,3 +204,32 @@ def test_warmup_conditions_in_the_zh_dcc(tmp_path):
                  f"标称值 {det['nominal_stability_dph']:g} °/h"):
         assert part in zh[0], part
         assert part in _text((d / "certificate.html").read_text(encoding="utf-8"))
+
+
+def test_warmup_records_spread_is_its_type_a_and_k_from_nu_eff(jjf):
+    """JJF 7.2.9: the N records' times enter u as the Type A line s/√N on ν = N − 1 (not
+    u = 0 beside records that differ), and k is t₉₅ at the Welch–Satterthwaite ν_eff the
+    uncertainty states (rounded down, as printed) — each recomputed here from the stored times and rows."""
+    from scipy import stats
+
+    it = jjf["res"]["items"]["warmup_time"]
+    t = [float(x) for x in it["details"]["t_n_s"]]
+    n = len(t)
+    mean = sum(t) / n
+    s = math.sqrt(sum((x - mean) ** 2 for x in t) / (n - 1))
+    u = it["uncertainty"]
+    rows = {r["symbol"]: r for r in u["components"]}
+    assert rows["t_w"]["type"] == "A"
+    assert rows["t_w"]["u"] == pytest.approx(s / math.sqrt(n), rel=1e-12)
+    uc = math.sqrt(sum(r["contribution"] ** 2 for r in u["components"]))
+    assert u["u_c"] == pytest.approx(uc, rel=1e-9)
+    if s > 0:
+        assert rows["t_w"]["dof"] == n - 1
+        nu = uc ** 4 / ((s / math.sqrt(n)) ** 4 / (n - 1))       # the others: ν = ∞
+        assert u["nu_eff"] == pytest.approx(nu, rel=1e-9)
+        # k from ν_eff rounded down, the ν printed (the statement rule)
+        assert u["k"] == pytest.approx(float(stats.t.ppf(0.975, math.floor(nu))), rel=1e-9)
+        assert u["U"] == pytest.approx(u["k"] * uc, rel=1e-9)
+        line = next(ln for ln in jjf["summary"].splitlines() if ln.strip().startswith("7.2.9"))
+        if "±" in line:                                   # k printed: its ν_eff beside it
+            assert f"ν_eff = {int(nu)}" in line, line

@@ -740,18 +740,22 @@ def warmup_time(ctx: Context) -> Item:
     every window of W samples has a block-mean stability ≤ the nominal value; the mean over
     the N records.
 
-    Uncertainty: the window step and the detection: a window's stability s is an estimate
+    Uncertainty: the records' spread (Type A, s/√N on ν = N − 1), the window step and the
+    detection: a window's stability s is an estimate
     with relative standard deviation r = 1/√(2(n_b − 1)) (n_b blocks per window), so the
     crossing of the nominal value can lie anywhere between the last exceedance of
     nominal·(1 + z·r) and of nominal·(1 − z·r), z = 1.96 (95 % for one window near the
     crossing) (:func:`gonio.specs.jjf1535.formulas.detection_interval`); that interval's
     width over 2z is the record's standard uncertainty, and the records' detections are
-    independent (u = rms(width/2z)/√N). The spread of the N records' times evaluates the
-    same noise (the power-ups differ by it alone) and is kept in the details only
-    (``spread_s``, ν = N − 1): with both in the budget, and the detection taken as the larger
-    distance to the interval's ends over 2, the study (the bench's transient on, 60 trials)
-    had z sd 0.55, its records' times spreading 21 s about the truth against a detection
-    term of 31–36 s; with the width alone z sd 0.90. The reading is not corrected: its mean
+    independent (u = rms(width/2z)/√N). The spread of the N records' times evaluates
+    partly the same noise, but it is what the power-ups showed: it is the Type A line (a
+    certificate cannot show u = 0 beside records that differ), and k comes from its ν by
+    Welch–Satterthwaite (ν_eff stated). On the study bench (100 trials, seed 20261301, the
+    detection as the interval's width over 2z): z sd 0.94 with the detection alone (k 1.96),
+    0.80 with both, coverage 0.96 at k = t₉₅(ν_eff) (median ν_eff 18, k 2.10); the records'
+    times spread 21 s (rms) about the truth against a detection term of 24 s (rms); with the
+    detection as the larger distance to the interval's ends and both in, z sd 0.55 (an
+    earlier study, 60 trials). The reading is not corrected: its mean
     error over those 180 records is 0.0 s (standard error 1.6 s), the truth being the time
     the expected stability, noise included, meets the nominal
     (``gonio.specs.jjf1535.truth``)."""
@@ -782,7 +786,10 @@ def warmup_time(ctx: Context) -> Item:
                             "the stability never met the nominal value within a record")
     dt = float(np.median(np.diff(segment_samples(ctx.df, "warmup", 0, 0)["time_s"])))
     step = w["block_samples"] * dt
-    inputs = [from_u("t_w", float(t.mean()), 0.0),
+    # the records' spread is the Type A evaluation of their mean (ν = N − 1, JCGM 100 4.2)
+    s_a = float(t.std(ddof=1) / math.sqrt(t.size)) if t.size > 1 else 0.0
+    inputs = [from_u("t_w", float(t.mean()), s_a, dof=(t.size - 1 if s_a > 0 else None),
+                     source=f"spread of the {t.size} records' times, s/√N"),
               type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0"),
               from_u("detect", 0.0, float(np.sqrt(np.mean(np.square(widths)) / t.size)),
                      type="B",
