@@ -1249,15 +1249,12 @@ def _one_blas_thread(fn):
 
 
 def power_on_records_pooled(recs) -> bool:
-    """IEC 62047-20 5.3.3.5, reading taken (docs/iec62047-20-readings.md, 5.3.3.5): the
-    records are repeated power-ons of one gyro (5.3.3.5 reads "the largest over the
-    records" of one characteristic), so where they have the same samples, smoothing and
-    times from power-on, ONE transient c_i + A·e^(−t/τ) (A, τ common, the level c_i each
-    record's own) is fitted to all of them — the least-squares fit of the records' mean,
-    exactly. Fitted one by one, each record's fit carries its own noise as a different
-    transient, the replicates then see records of unequal drift, and the selection of the
-    largest over the records (the reading's excess where the records share the truth)
-    goes uncorrected. Records that differ in length or timing are fitted one by one."""
+    """IEC 62047-20 5.3.3.5, reading taken (docs/iec62047-20-readings.md, 5.3.3.5): whether the
+    records CAN be fitted with one transient — the same samples, smoothing and times from
+    power-on. This is the precondition of :func:`power_on_one_transient`, not the decision:
+    repeated power-ons of a real gyro differ (start temperature), and one transient is
+    fitted only where the records' own fits do not refute it. Records that differ in length
+    or timing are fitted one by one."""
     if len(recs) < 2:
         return False
     t0, ys0, y0 = recs[0]
@@ -1267,18 +1264,70 @@ def power_on_records_pooled(recs) -> bool:
                for tt, ys, y in recs[1:])
 
 
-def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.0)) -> dict:
+#: Level of 5.3.3.5's test that the power-on records share one transient
+#: (:func:`power_on_one_transient`): one transient is refuted at p < 0.05.
+POWER_ON_POOL_LEVEL = 0.05
+
+
+def power_on_lr_statistic(Y: np.ndarray, pooled_model: np.ndarray, own_models) -> np.ndarray:
+    """The likelihood-ratio statistic of 5.3.3.5's one-transient test for Gaussian noise of
+    one covariance (up to its scale): T = Σ_i ‖r_i^pooled‖² − Σ_i ‖r_i^own‖², the records'
+    residual sums of squares under one transient c_i + A·e^(−t/τ) (the level c_i each
+    record's own: the fit of the records' mean, less each record's mean) less those of each
+    record's own fit c_i + A_i·e^(−t/τ_i). ``Y``: (…, records, blocks) smoothed values;
+    ``pooled_model``: (…, blocks) the fit of their mean; ``own_models``: (…, records,
+    blocks). T ≥ 0 up to rounding (the own fits nest the pooled one on the τ grid)."""
+    Yc = Y - Y.mean(-1, keepdims=True)
+    pc = pooled_model - pooled_model.mean(-1, keepdims=True)
+    oc = own_models - own_models.mean(-1, keepdims=True)
+    return (((Yc - pc[..., None, :]) ** 2).sum((-2, -1))
+            - ((Yc - oc) ** 2).sum((-2, -1)))
+
+
+def power_on_one_transient(t_obs: float, t_star: np.ndarray,
+                           level: float = POWER_ON_POOL_LEVEL) -> tuple[bool, float]:
+    """IEC 62047-20 5.3.3.5, reading taken (docs/iec62047-20-readings.md, 5.3.3.5): the
+    measurand is the largest drift over the records, and repeated power-ons differ, so one
+    transient is fitted to all records only where a test does not refute it. The test:
+    each record's own fit against the one-transient fit by the likelihood ratio
+    ``t_obs`` (:func:`power_on_lr_statistic`), its null distribution ``t_star`` that of the
+    same statistic in the replicates of the one-transient fit at the noise found (white σ_y
+    and the bias drift, :func:`_power_on_replicates`: the smoothed values' correlation under
+    the walk and flicker is in it, as an F table would not have it); p = (1 + #{T* ≥ T})/
+    (1 + n). Returns (one transient, p): one transient where p ≥ ``level``
+    (:data:`POWER_ON_POOL_LEVEL`), else the records are fitted one by one (each record's
+    replicates then carry its own transient, and the selection among records of unequal
+    drift is that of the records' actual fitted transients).
+
+    >>> power_on_one_transient(97.5, np.arange(99.0))
+    (False, 0.02)
+    >>> power_on_one_transient(0.5, np.arange(99.0))
+    (True, 0.99)
+    """
+    t_star = np.asarray(t_star, float)
+    p = float((1 + np.count_nonzero(t_star >= t_obs)) / (1 + t_star.size))
+    return p >= level, round(p, 12)
+
+
+def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.0),
+                         pooled=None, test: bool = False) -> dict:
     """The parametric bootstrap of 5.3.3.5 (:func:`power_on_drift_budget`): the records'
-    readings, their fitted transient(s) (:func:`power_on_records_pooled`) and
-    :data:`POWER_ON_MC_TRIALS` replicates of the fitted records, each read (R*) and fitted
-    (R̂*) as the data are. ``scale`` multiplies the three noise variances (white σ_y²,
-    walk K², flicker B²; the wander of ``drift_u`` by the second) with the same random
-    numbers: the sensitivities of u_c² for its degrees of freedom."""
+    readings, their fitted transient(s) and :data:`POWER_ON_MC_TRIALS` replicates of the
+    fitted records, each read (R*) and fitted (R̂*) as the data are. ``pooled``: one
+    transient for all records (True), one per record (False), or None: one where the
+    records can share it (:func:`power_on_records_pooled`) — the caller decides by
+    :func:`power_on_one_transient`, for which ``test`` (with one transient) adds the
+    likelihood ratio of the records ("lr") and of each replicate ("lr_star"). ``scale``
+    multiplies the three noise variances (white σ_y², walk K², flicker B²; the wander of
+    ``drift_u`` by the second) with the same random numbers: the sensitivities of u_c² for
+    its degrees of freedom."""
     P = max(recs[0][2].size // max(recs[0][1].size, 1), 1)
     rng = np.random.default_rng(POWER_ON_MC_SEED)
     n_mc = POWER_ON_MC_TRIALS
     sw, sk, sb = (float(x) for x in scale)
-    pooled = power_on_records_pooled(recs)
+    pooled = power_on_records_pooled(recs) if pooled is None else bool(pooled)
+    test = test and pooled
+    stars = []
     vals, dists, sig, designs = [], [], [], []
     for tt, ys, y in recs:
         ref = float(y[:nr].mean())
@@ -1312,14 +1361,26 @@ def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.
         kept.append((dev, mb - mr))
         if pooled:
             ys_sum = ys_sum + ys_star
+            if test:
+                stars.append(ys_star)
         else:
             r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, dz)]))
+    out = {}
     if pooled:
-        r_fit = np.array([f[2] for f in _transient_fits(ys_sum / len(recs), designs[0])])
+        pf = _transient_fits(ys_sum / len(recs), designs[0])
+        r_fit = np.array([f[2] for f in pf])
+    if test:
+        own = [_transient_fits(ys[None, :], dz)[0][0] for (_, ys, _), dz in zip(recs, designs)]
+        out["lr"] = float(power_on_lr_statistic(np.array([ys for _, ys, _ in recs]),
+                                                fits[0][0], np.array(own)))
+        Ys = np.stack(stars, axis=1)                                  # (n_mc, records, blocks)
+        own_star = np.stack([np.array([f[0] for f in _transient_fits(Ys[:, j], designs[j])])
+                             for j in range(len(recs))], axis=1)
+        out["lr_star"] = power_on_lr_statistic(Ys, np.array([f[0] for f in pf]), own_star)
     return {"vals": vals, "dists": dists, "sig": sig, "P": P, "pooled": pooled,
             "r_hat": r_hat, "r_star": r_star, "r_fit": r_fit, "kept": kept,
             "white_dof": float(sum(max(y.size - 2, 1) for _, _, y in recs))
-            / SECOND_DIFFERENCE_RHO2}
+            / SECOND_DIFFERENCE_RHO2, **out}
 
 
 #: Σ ρ_k² of white noise's second differences (ρ₁ = −2/3, ρ₂ = 1/6): σ_y² from m second
@@ -1394,7 +1455,9 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     drift is non-negative, and V's distribution is skewed near 0. The contenders (details)
     are the smoothed values within 2√2·σ of the largest (σ of one smoothed value less the
     reference)."""
-    rep = _power_on_replicates(recs, nr, drift_u, drift_coef)
+    rep = _power_on_replicates(recs, nr, drift_u, drift_coef, test=True)
+    if rep["pooled"] and not power_on_one_transient(rep["lr"], rep["lr_star"])[0]:
+        rep = _power_on_replicates(recs, nr, drift_u, drift_coef, pooled=False)
     vals, r_hat, r_star, r_fit = rep["vals"], rep["r_hat"], rep["r_star"], rep["r_fit"]
     excess = float(r_star.mean() - r_hat)
     r_at = r_hat - float(r_fit.mean() - r_hat)
@@ -1403,7 +1466,7 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     v_star = r_star - excess - g * (r_fit - r_hat)
     resid = float(v_star.mean() - r_hat)
     u_v = float(v_star.std(ddof=1))
-    shares = _power_on_shares(recs, nr, drift_u, drift_coef, g, u_v)
+    shares = _power_on_shares(recs, nr, drift_u, drift_coef, g, u_v, rep["pooled"])
     nu = power_on_dof(shares, [rep["white_dof"], *coef_dof], POWER_ON_MC_TRIALS)
     i = int(np.argmax(vals))
     sd_i = rep["sig"][i] * math.sqrt(1.0 / rep["P"] + 1.0 / nr)
@@ -1435,7 +1498,8 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
 POWER_ON_SHARE_STEP = 0.2
 
 
-def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float) -> list:
+def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float,
+                     pooled=None) -> list:
     """s_i = ∂ln u_c²/∂ln v_i of 5.3.3.5's u_c² = var(R* − g·R̂*) for the white, walk and
     flicker variances (in that order), by a central difference of ± :data:`POWER_ON_SHARE_STEP`
     with the same random numbers (:func:`_power_on_replicates`'s ``scale``); 0 for a
@@ -1453,7 +1517,7 @@ def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float) -
         for f in (1.0 + POWER_ON_SHARE_STEP, 1.0 - POWER_ON_SHARE_STEP):
             sc = [1.0, 1.0, 1.0]
             sc[j] = f
-            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, sc)
+            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, sc, pooled)
             var.append(float(np.var(rep["r_star"] - g * rep["r_fit"], ddof=1)))
         out.append((var[0] - var[1]) / (2.0 * POWER_ON_SHARE_STEP * u_v ** 2))
     return out
