@@ -1,17 +1,17 @@
 """An item stated only by its coverage interval: the DCC writes the interval and, as its
-si:value, the value the certificate's statement rounds (sign and digits), also where that
-value lies outside the interval: a non-negative quantity whose bias-corrected estimate fell
-below zero (stated on the certificate by its upper bound alone, "≤ upper (interval [0,
-upper])") is written with its signed estimate, never with the interval's 0 (a number nobody
-measured), and its description says that the statement is the bound. Checked through the
-writers every DCC uses (the rate and per-item DCCs' :func:`gonio.report.stated.item_nums` →
-:func:`gonio.report.dcc.quantity`), on numbers written here, with the interval's ends worked
-out independently of the statement rule."""
+si:value, the value the certificate's statement rounds (sign and digits). A non-negative
+quantity whose bias-corrected estimate fell below zero is stated on the certificate by its
+upper bound alone ("≤ upper (interval [0, upper])"): the DCC writes that bound as its
+si:value (the one number the certificate prints: never the negative estimate, which lies
+outside its own interval and no page prints), and its description says that the statement
+is the bound. Checked through the writers every DCC uses (the rate and per-item DCCs'
+:func:`gonio.report.stated.item_nums` → :func:`gonio.report.dcc.quantity`), on numbers
+written here, with the interval's ends worked out independently of the statement rule."""
 
 from __future__ import annotations
 
 import math
-from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal
+from decimal import ROUND_CEILING, Decimal
 
 import pytest
 from lxml import etree
@@ -36,13 +36,13 @@ def _item(value, U, interval=None):
     (-0.5, 2.54, (0.0, 2.04)),
     (-3.0, 4.0, None),          # a ± U item below zero: [0, value + U] by the rule
 ])
-def test_dcc_value_is_the_signed_estimate_beside_its_interval(value, U, interval):
+def test_dcc_value_of_an_estimate_below_zero_is_its_printed_bound(value, U, interval):
     it = _item(value, U, interval)
     n = item_nums(it, "items.x")
     st = n["statement"]
     assert st.below_zero and n["interval"] is not None
     root = element(etree.Element("root", nsmap={"dcc": DCC_NS, "si": SI_NS}), "dcc:data")
-    quantity(root, "x", n["value"], "%", interval=n["interval"]["ends"],
+    quantity(root, "x", n["stated_value"], "%", interval=n["interval"]["ends"],
              u_std=n["interval"]["u"], p=0.95, description=st.text())
     v = float(root.find(".//si:real/si:value", NS).text)
     lo = float(root.find(".//si:intervalMin", NS).text)
@@ -52,14 +52,13 @@ def test_dcc_value_is_the_signed_estimate_beside_its_interval(value, U, interval
     end = interval[1] if interval else value + U
     q = Decimal(1).scaleb(-(2 - 1 - Decimal(repr(end)).adjusted()))
     assert lo == 0.0 and hi == float(Decimal(repr(end)).quantize(q, rounding=ROUND_CEILING))
-    # the signed estimate, rounded half up at the statement's decimals (never the 0 of
-    # the interval's lower end)
+    # si:value: that bound, as printed (never the negative estimate outside [0, upper])
     text = root.find(".//si:real/si:value", NS).text
-    places = len(text.partition(".")[2])
-    assert v < lo and text.startswith("-")
-    assert math.isclose(v, float(Decimal(repr(value)).quantize(
-        Decimal(1).scaleb(-places), rounding=ROUND_HALF_UP)), rel_tol=1e-12)
+    assert not text.startswith("-") and v == hi and v > value
+    assert math.isclose(v, float(Decimal(repr(end)).quantize(q, rounding=ROUND_CEILING)),
+                        rel_tol=1e-12)
     assert "below zero" in root.find(".//dcc:description/dcc:content", NS).text
+    assert st.upper_text in root.find(".//dcc:description/dcc:content", NS).text
 
 
 def test_a_value_inside_its_interval_is_written_as_stated():

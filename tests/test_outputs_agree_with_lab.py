@@ -329,7 +329,7 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
     kinds = {"max-abs-interval": ("max_i |x_i|", "最大绝对值"),
              "interval of max|x_i| (uncertainty.extreme.max_abs_interval)":
                  ("max_i |x_i|", "最大绝对值"),
-             "χ² interval of the largest spread over its selection excess":
+             "interval of the largest true spread inverting each record's own χ² test":
                  ("selection bias of the maximum", "选择偏差"),
              "chi-square": ("σ's χ² distribution", "χ² 分布"),
              "neyman-belt": ("confidence belt", "置信带")}
@@ -400,11 +400,12 @@ def test_dcc_coverage_probability_is_the_stated_one(issued):
 
 def test_dcc_value_is_the_stated_value_with_its_sign(issued):
     """Every DCC quantity of an item's value holds the number the certificate states, sign
-    and digits: a negative mean or bias (the triad's M_yx, b_y …), and a non-negative
-    item whose bias-corrected estimate fell below zero (the optical C_g at this seed, stated
-    "≤ upper" with its note), are written with their minus sign, never as the interval's 0;
-    worked out here from results.json's float and the printed decimals of the certificate's
-    span (Decimal half-up, an independent rounding)."""
+    and digits: a negative mean or bias (the triad's M_yx, b_y …) is written with its minus
+    sign, worked out here from results.json's float and the printed decimals of the
+    certificate's span (Decimal half-up, an independent rounding); a non-negative item whose
+    bias-corrected estimate fell below zero (the optical C_g at this seed, stated "≤ upper"
+    with its note) is written as that bound, results.json's ``upper_bound`` and the end of
+    its interval, never as the negative estimate the certificate does not print."""
     from decimal import ROUND_HALF_UP, Decimal
 
     from gonio.report.i18n import minus_sign
@@ -416,6 +417,13 @@ def test_dcc_value_is_the_stated_value_with_its_sign(issued):
             prev = real.getprevious()
             m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value rule=s?dec(-?\d+)\b",
                           prev.text or "") if isinstance(prev, etree._Comment) else None
+            if not m and isinstance(prev, etree._Comment) and ".upper_bound " in prev.text:
+                key = re.search(r"src=items\.([A-Za-z0-9_]+)\.upper_bound", prev.text).group(1)
+                it, got = res["items"][key], real.find("si:value", NS).text
+                hi = real.find(".//si:intervalMax", NS).text
+                assert it["value"] < 0 and float(got) == it["upper_bound"] and got == hi, \
+                    (lang, key, got, it["value"], it["upper_bound"], hi)
+                negative += 1
             if not m or "factor=" in prev.text:
                 continue               # a power of ten or a unit conversion: tests above
             key, places = m.group(1), int(m.group(2))
@@ -460,8 +468,8 @@ def _cells(row_html: str) -> list[str]:
 
 def test_environment_conditions_carry_the_certificates_digits(issued):
     """The DCC's temperature and humidity are the numbers the certificate prints beside
-    "Temperature" / "Relative humidity" (digits and all: 20.1, never 20.10; 45, never 45.0),
-    in both languages."""
+    "Temperature" / "Relative humidity" (digits and all, as the laboratory file writes them: 20.1,
+    never 20.10; 45.0 written 45.0, never 45), in both languages."""
     for lang in ("en", "zh"):
         html = issued["out"][lang]["html"]
         printed = {}

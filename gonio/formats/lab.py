@@ -293,7 +293,52 @@ def load_lab(path: str | Path) -> dict:
         raise GonioError("specification limits need the decision rule agreed "
                          "([decision_rule] rule = simple | guarded | non-binary)", file=path,
                          key="decision_rule")
+    _keep_condition_digits(lab["environment"], path)
     return lab
+
+
+class WrittenNumber(float):
+    """A number of a file that keeps the text it was written as (``text``): a laboratory
+    file's ``temperature_c = 20.0`` states its resolution as a logger's "20.0" does, so the
+    certificate and the DCC print "20.0", not "20" (:func:`gonio.report.header.condition_text`).
+    It is the float everywhere else, pickled and copied with its text.
+
+    >>> t = WrittenNumber(20.0, "20.0")
+    >>> t == 20.0, t.text, __import__("copy").deepcopy(t).text, __import__("json").dumps(t)
+    (True, '20.0', '20.0', '20.0')
+    """
+
+    text: str
+
+    def __new__(cls, value: float, text: str):
+        obj = super().__new__(cls, value)
+        obj.text = text
+        return obj
+
+    def __reduce__(self):
+        return (WrittenNumber, (float(self), self.text))
+
+
+def _keep_condition_digits(env: dict, path) -> None:
+    """The ``[environment]`` numbers of laboratory file ``path`` as :class:`WrittenNumber`
+    with their text in the file (TOML's own number text, underscores dropped)."""
+    import tomllib
+
+    from gonio.errors import read_utf8
+
+    if not env or all(env.get(k) is None for k in ("temperature_c", "humidity_pct")):
+        return
+    try:
+        raw = tomllib.loads(read_utf8(Path(path), "TOML file"),
+                            parse_float=lambda t: t).get("environment") or {}
+    except (tomllib.TOMLDecodeError, GonioError, OSError):
+        return                                # already read once: keep the numbers as read
+    for key in ("temperature_c", "humidity_pct"):
+        text = raw.get(key)
+        if env.get(key) is not None and isinstance(text, str):
+            text = text.replace("_", "")
+            if float(text) == env[key]:
+                env[key] = WrittenNumber(env[key], text)
 
 
 @contextlib.contextmanager

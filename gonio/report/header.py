@@ -159,7 +159,12 @@ def condition_text(v) -> str:
     ('20.1', '45', '22.50', '20')
     >>> condition_text("2e1"), condition_text("+21.5"), condition_text("2.05E1")
     ('20', '21.5', '20.5')
+
+    A laboratory file's number keeps its digits as written there
+    (:class:`gonio.formats.lab.WrittenNumber`: ``temperature_c = 20.0`` is "20.0").
     """
+    if isinstance(getattr(v, "text", None), str):
+        v = v.text
     if isinstance(v, str):
         t = v.strip()
         if not any(c in t for c in "eE+"):

@@ -206,12 +206,16 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "多个点的最大绝对值 max|x_i| 给出该极值的 95 % 区间 [max(0, max(|x_i| − "
                            "c_L·u_i)), max(|x_i| + c_H·u_i)]（对各点取最大，由各点的 x_i 与 u_i "
                            "求得），对各点真值的任何分布形态均成立（而非单点的 max|x_i| ± k·u）"},
-    "k_iv_sel_max": {"en": "the largest of several standard deviations by its χ² interval with "
-                           "the selection bias of the maximum removed (the midpoint of its "
-                           "bounds) and the interval widened by those bounds, its upper end "
-                           "at least every record's own χ² upper bound at its own ν",
-                     "zh": "若干标准偏差中的最大者给出其 χ² 区间：扣除取最大值的选择偏差（取其界限的"
-                           "中点），区间按该界限加宽，上端不低于各记录按其自身 ν 的 χ² 上限"},
+    "k_iv_sel_max": {"en": "the largest of several standard deviations, the selection bias of the "
+                           "maximum removed (the midpoint of its bounds), by the 95 % interval "
+                           "of the largest true spread that inverts each record's own χ² test: "
+                           "its upper end the largest of the records' own χ² upper bounds, its "
+                           "lower end the largest of their lower bounds at the Šidák level, for "
+                           "any true spreads and record lengths",
+                     "zh": "若干标准偏差中的最大者（扣除取最大值的选择偏差，取其界限的中点），由反演各记录"
+                           "自身 χ² 检验所得最大真标准偏差的 95 % 区间给出：上端为各记录自身 χ² 上限中的"
+                           "最大者，下端为各记录按 Šidák 水平的下限中的最大者，对任何真标准偏差与记录长度"
+                           "均成立"},
     "k_iv_bound": {"en": "a quantity the rate table's errors enter by its bound-condition interval "
                          "value ± (a + k·u): the table's errors at their bounds in their worst "
                          "combination, a, plus k·u of the other lines, which holds at every "
@@ -643,6 +647,8 @@ DCC_ZH: dict[str, str] = {
     "serial number": "出厂编号",
     # the kinds of 95 % interval (results.json k_source) a "not given" probability names
     "interval of max|x_i| (uncertainty.extreme.max_abs_interval)": "多个点最大绝对值的区间",
+    "interval of the largest true spread inverting each record's own χ² test":
+        "由各记录自身 χ² 检验反演所得最大真标准偏差的区间",
     "χ² interval of the largest spread over its selection excess":
         "扣除选择偏差后最大标准偏差的 χ² 区间",
     "neyman-belt": "置信带",

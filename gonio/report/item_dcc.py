@@ -121,7 +121,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                   "p": float(p)}                       # stated by its coverage interval
         st = n.get("statement")
-        quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
+        quantity(d, name, n["stated_value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
                  ref_type="basic_measuredValue",
                  description=st.text() if st is not None and st.below_zero else None, **kw)
     for mname, keys in content_field(data, "MATRICES"):
@@ -151,7 +151,7 @@ def matrix_result(results, name: str, keys: list[str], items: dict,
     q.append(etree.Comment(" src-list=" + " ".join(f"items.{k}.value" for k in keys) + " "))
     rl = element(q, "si:realListXMLList")
     element(rl, "si:labelXMLList", " ".join(keys))
-    element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(n["value"])) for n in ns))
+    element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(n["stated_value"])) for n in ns))
     element(rl, "si:unitXMLList", " ".join(compose_dsi(items[k]["unit"]) for k in keys))
     if all(n["U"] is not None and n["k"] is not None for n in ns):
         ps = [(_p(items[k]) if _p(items[k]) is not None else p_default) for k in keys]

@@ -195,7 +195,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                 kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                       "p": float(item_p(it))}         # stated by its coverage interval
             conv = factor != 1.0
-            quantity(data, name, n["value"], "", dsi=dsi,
+            quantity(data, name, n["stated_value"], "", dsi=dsi,
                      note=f" factor={factor!r}" if conv else "",
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
                      description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
@@ -212,7 +212,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
 def _below_zero_text(n: dict) -> str | None:
     """The certificate's statement of a non-negative item whose estimate fell below zero
     (its upper bound alone and the note), the description beside the DCC's value, which
-    is the signed estimate as the certificate rounds it (:func:`gonio.report.dcc.real`)."""
+    is that bound (``item_nums``' ``stated_value``: the one number the certificate prints)."""
     st = n.get("statement")
     return st.text() if st is not None and st.below_zero else None
 

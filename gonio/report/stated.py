@@ -27,7 +27,8 @@ from typing import Any
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
 from gonio.result.text import measured_clause
-from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX, decimals_for_sig,
+from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX,
+                                    K_SOURCE_SELECTED_MAX_BEFORE, decimals_for_sig,
                                     given_text, round_half_up)
 
 
@@ -195,7 +196,8 @@ def interval_kind(item: dict) -> str | None:
             return "bound"
         return {"chi-square": "chi2", "normal range": "range", "neyman-belt": "belt",
                 K_SOURCE_MAX_ABS: "max_abs", K_SOURCE_MAX_MAGNITUDE: "max_abs",
-                K_SOURCE_SELECTED_MAX: "sel_max"}.get(ks, "own")
+                K_SOURCE_SELECTED_MAX: "sel_max",
+                K_SOURCE_SELECTED_MAX_BEFORE: "sel_max"}.get(ks, "own")
     return "upper" if item.get("upper_bound") is not None else None
 
 
@@ -395,6 +397,10 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     ``U``, ``k``, ``nu`` as :class:`Num` (or None), ``p`` (per-cent text or None), ``upper``
     (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`). An item
     stated by its interval has ``U`` and ``k`` None and ``statement.interval`` set.
+    ``stated_value``: the one number an output that must write a value (the DCC's si:value)
+    writes: ``value``, or for a non-negative quantity whose estimate fell below zero
+    (``statement.below_zero``, stated by its upper bound alone) that bound, as every output
+    prints it — never the negative estimate the statement leaves out.
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
@@ -416,8 +422,8 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
               else float(item["value"]) * factor, "uncertainty": unc}
     st = item_statement(it, sig=sig)
     u_c = (it.get("uncertainty") or {}).get("u_c")
-    out = {"statement": st, "value": None, "U": None, "k": None, "nu": None, "p": st.p,
-           "upper": st.upper, "interval": None}
+    out = {"statement": st, "value": None, "stated_value": None, "U": None, "k": None,
+           "nu": None, "p": st.p, "upper": st.upper, "interval": None}
     if st.interval is not None:     # the DCC's coverage interval: ends and u (2 digits)
         out["interval"] = {"ends": st.interval_ends,
                            "u": None if not u_c else display_uncertainty(float(u_c))}
@@ -431,7 +437,9 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     else:
         rule = f"dec{st.decimals}" if st.decimals is not None else f"sig{sig}"
         U_rule = "U"
-    out["value"] = Num(st.value_text, f"{src}.value", rule)
+    out["value"] = out["stated_value"] = Num(st.value_text, f"{src}.value", rule)
+    if st.below_zero:
+        out["stated_value"] = Num(st.upper_text, f"{src}.upper_bound", rule)
     if st.U is not None:
         out["U"] = Num(st.U_text, f"{src}.uncertainty.U", U_rule)
         if st.k is not None:

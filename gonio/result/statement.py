@@ -765,9 +765,13 @@ def _get(obj, key: str, default=None):
 K_SOURCE_MAX_ABS = "max-abs-interval"
 
 #: ``k_source`` of the largest of several standard deviations stated with the selection bias
-#: of its maximum removed: its χ² interval, widened by that bias's bounds (IEC 62047-20
-#: 5.1.3.7's max σ_i).
-K_SOURCE_SELECTED_MAX = "χ² interval of the largest spread over its selection excess"
+#: of its maximum removed (IEC 62047-20 5.1.3.7's max σ_i): its 95 % interval inverts each
+#: record's own χ² test (the upper end the largest of the records' own upper bounds, the lower
+#: the largest of their Šidák-level lower bounds; ``max_spread_bounds`` of the IEC package).
+K_SOURCE_SELECTED_MAX = "interval of the largest true spread inverting each record's own χ² test"
+#: The same ``k_source`` as results.json files written before 1 Dec 2026 name it (their
+#: interval was the χ² interval of the largest spread united over its selection excess).
+K_SOURCE_SELECTED_MAX_BEFORE = "χ² interval of the largest spread over its selection excess"
 
 #: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of
 #: magnitudes (:func:`gonio.result.gum.max_magnitude_statement`: JJF 1535 and IEC 62047-20

@@ -143,8 +143,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
-        elif s["below_zero"]:     # its bound alone (si:value the signed estimate), and why
-            quantity(data, L[name], s["value"], item["unit"],
+        elif s["below_zero"]:     # its bound alone (si:value the bound it prints), and why
+            quantity(data, L[name], s["bound"], item["unit"],
                      description="; ".join(d for d in (LABELS["below_zero"]["en"],
                                                        _range_table_text(res, name, L)) if d),
                      **kw)
