@@ -788,7 +788,7 @@ def warmup_time(ctx: Context) -> Item:
     step = w["block_samples"] * dt
     # the records' spread is the Type A evaluation of their mean (ν = N − 1, JCGM 100 4.2)
     s_a = float(t.std(ddof=1) / math.sqrt(t.size)) if t.size > 1 else 0.0
-    inputs = [from_u("t_w", float(t.mean()), s_a, dof=(t.size - 1 if s_a > 0 else None),
+    inputs = [from_u("t_w", float(t.mean()), s_a, dof=(t.size - 1 if s_a > 0 else math.inf),
                      source=f"spread of the {t.size} records' times, s/√N"),
               type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0"),
               from_u("detect", 0.0, float(np.sqrt(np.mean(np.square(widths)) / t.size)),
