@@ -55,14 +55,19 @@ def hand_interval(res: dict) -> tuple[float, float, float]:
     table = res["items"]["angle_deviation"]["details"]["table"]
     points = {round(p["position_deg"], 9): p for p in res["extra"]["uncertainty"]["points"]}
     x = np.array([abs(r["E_arcsec"]) for r in table])
-    u = np.array([points[round(r["position_deg"], 9)]["u_c_arcsec"] for r in table])
-    nu = [points[round(r["position_deg"], 9)]["nu_eff"] for r in table]
+    pt = [points[round(r["position_deg"], 9)] for r in table]
+    # where the table's bound b_i is stated, u and ν are the point's without its table line
+    # and b_i widens each point's reach (every table within the MPE; 0 elsewhere)
+    bounded = "table_bound_arcsec" in pt[0]
+    u = np.array([p["u_without_table_arcsec" if bounded else "u_c_arcsec"] for p in pt])
+    nu = [p["nu_without_table" if bounded else "nu_eff"] for p in pt]
+    b = np.array([p.get("table_bound_arcsec", 0.0) for p in pt])
     c_hi, c_lo = _factors(len(x))
 
     def f(c):       # each ν as stated (GUM G.6.4): its integer part, the normal above 1000
         return np.array([c if n is None or n > 1000 else
                          float(student.ppf(norm.cdf(c), max(1, math.floor(n)))) for n in nu])
-    return max(0.0, float(np.max(x - f(c_lo) * u))), float(np.max(x + f(c_hi) * u)), \
+    return max(0.0, float(np.max(x - f(c_lo) * u - b))), float(np.max(x + f(c_hi) * u + b)), \
         float(np.max(x))
 
 

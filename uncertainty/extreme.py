@@ -97,11 +97,22 @@ def max_abs_factors(m: int, p: float = 0.95) -> tuple[float, float]:
     return float(c_upper), c_lower
 
 
-def max_abs_interval(x, u, dof=math.inf, p: float = 0.95) -> MaxAbsInterval:
+def max_abs_interval(x, u, dof=math.inf, p: float = 0.95, bound=0.0) -> MaxAbsInterval:
     """The interval of max_i |μ_i| from estimates ``x`` with standard uncertainties ``u``
     (ν ``dof``, one or per point): [max(0, max_i(|x_i| − c_L,i u_i)), max_i(|x_i| +
     c_H,i u_i)], c the normal factors of :func:`max_abs_factors` or, at finite ν_i, the
     Student-t quantiles of the same tail probabilities (module docstring).
+
+    ``bound`` (one or per point, ≥ 0): a systematic error of each estimate known only by its
+    bound b_i (|δ_i| ≤ b_i, not in u_i), added to each point's reach, [max(0, max_i(|x_i| −
+    c_L u_i − b_i)), max_i(|x_i| + c_H u_i + b_i)]: the interval of max_i |μ_i + δ_i| from
+    the u_i alone holds max_i |μ_i| for every δ within the bounds (above: the point j of the
+    largest |μ_j| is a fixed point, |μ_j| ≤ |μ_j + δ_j| + b_j; below: Šidák's event for every
+    point, |x_i| − c_L u_i ≤ |μ_i + δ_i| ≤ |μ_i| + b_i).
+
+    >>> r = max_abs_interval([0.5], [0.1], bound=0.05)
+    >>> round(r.lower, 4), round(r.upper, 4)
+    (0.254, 0.746)
 
     One point is the usual two-sided interval folded at 0; twelve points with one far out:
     the upper limit 1.666 u above it, not 1.96 u:
@@ -124,14 +135,17 @@ def max_abs_interval(x, u, dof=math.inf, p: float = 0.95) -> MaxAbsInterval:
     nu = np.broadcast_to(np.asarray(dof, dtype=float), x.shape)
     if np.any(~(nu >= 1.0)):
         raise ValueError("max_abs_interval needs every dof >= 1")
+    b = np.broadcast_to(np.asarray(bound, dtype=float), x.shape)
+    if not np.all(np.isfinite(b) & (b >= 0)):
+        raise ValueError("max_abs_interval needs finite bounds >= 0")
     c_up, c_lo = max_abs_factors(x.size, p)
 
     def factor(c: float) -> np.ndarray:
         q = norm.cdf(c)
         return np.array([c if math.isinf(n) else float(student.ppf(q, n)) for n in nu])
 
-    upper = float(np.max(x + factor(c_up) * u))
-    lower = max(0.0, float(np.max(x - factor(c_lo) * u)))
+    upper = float(np.max(x + factor(c_up) * u + b))
+    lower = max(0.0, float(np.max(x - factor(c_lo) * u - b)))
     return MaxAbsInterval(lower=lower, upper=upper, estimate=float(np.max(x)), p=float(p),
                           c_lower=c_lo, c_upper=c_up, m=int(x.size))
 

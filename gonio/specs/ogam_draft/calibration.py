@@ -1130,9 +1130,52 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;
     # the longest time to reading) stay those of Annex A's reading, not this point's
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
+    bounds = _point_table_bounds(pos, sub, stops, settings["table_mpe_arcsec"])
+    if any(b > 0 for b in bounds[0]):
+        points = tuple(dict(d, table_bound_arcsec=b, u_without_table_arcsec=u,
+                            nu_without_table=None if math.isinf(n) else n)
+                       for d, b, u, n in zip(points, *bounds))
     return dataclasses.replace(sub[at], points=points, parameters=params,
                                max_interval=e_max_interval(pts["E_arcsec"], sub,
-                                                           positions=pos))
+                                                           positions=pos, table=bounds))
+
+
+#: The source marking a 7.4 point's table line at the MPE where E's angles come from counts
+#: through the 7.1 K (:func:`_point_table_line`), which E's extreme takes by its bound.
+_MPE_TABLE_LINE = "[physical budget: P and K_P as one line]"
+
+
+def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float):
+    """Per 7.4 point (the physical budgets ``budgets``): the table's bound b_i on E_i, and u
+    and ν of the point's budget without its table line, for E's extreme
+    (:func:`e_max_interval`). Where the point's table line is the MPE's through the 7.1 K
+    (P and K_P as one line, :func:`_point_table_line`), the table's error at the point is
+    Σ_p c_p e_p (:func:`~gonio.specs.ogam_draft.budget_extra.table_error_coefficients`) with
+    every |e_p| ≤ MPE (A.4.1), so |δ_i| ≤ b_i = MPE·Σ_p |c_p| at a vertex of the box (JCGM 100
+    4.3.7; the analogue of K's MPE·Σ|c_p|): one table — the corner, the zero at −MPE and every
+    stop at +MPE — moves every point at once, which per-point lines at MPE/√3 combined
+    with the other points' noise do not hold. u without it: √(u_c² − u_P²), ν by
+    Welch–Satterthwaite over the other lines (JCGM 100 G.4.1). A calibrated table's line or
+    Annex A's P stays in u (b_i = 0)."""
+    from gonio.specs.ogam_draft.budget_extra import table_error_coefficients
+
+    out_b, out_u, out_n = [], [], []
+    for theta, b in zip(pos, budgets):
+        tab = [c for c in b.gum.contributions
+               if c.symbol == "P" and _MPE_TABLE_LINE in c.source]
+        if not tab:
+            out_b.append(0.0)
+            out_u.append(float(b.u_c_arcsec))
+            out_n.append(float(b.gum.dof))
+            continue
+        c = np.array(list(table_error_coefficients(float(theta), stops).values()))
+        rest = [x for x in b.gum.contributions if x is not tab[0]]
+        u2 = sum(x.contribution ** 2 for x in rest)
+        den = sum(x.contribution ** 4 / x.dof for x in rest if math.isfinite(x.dof) and x.dof > 0)
+        out_b.append(float(mpe_arcsec) * float(np.sum(np.abs(c))))
+        out_u.append(math.sqrt(u2))
+        out_n.append(math.inf if den == 0 else u2 * u2 / den)
+    return out_b, out_u, out_n
 
 
 def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
@@ -1175,7 +1218,8 @@ E_U_C_OF = ("max|E_i|: the law of propagation at the estimates (JCGM 100 5.1.2),
             "its upper end minus max|E_i|, not k·u_c")
 
 
-def e_max_interval(e_arcsec, budgets, one_budget: bool = False, positions=None) -> dict:
+def e_max_interval(e_arcsec, budgets, one_budget: bool = False, positions=None,
+                   table=None) -> dict:
     """The 95 % interval of E's extreme, max_i |E_i,true| (7.4's E = ± max|E_i|), from the
     points' E_i and their physical budgets' u_c and ν_eff: [max(0, max_i(|E_i| − c_L u_i)),
     max_i(|E_i| + c_H u_i)] (:func:`uncertainty.extreme.max_abs_interval`; beyond the draft).
@@ -1193,14 +1237,26 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False, positions=None) 
     the standard uncertainty of max|E_i| by the law of propagation at the estimates. The
     draft's U is a statement about one point: max|E_i| ± U covers
     max|E_i,true| only about 0.95^12 ≈ 54 % of the time where every true E_i is 0.
+
+    ``table``: (b_i, u_i, ν_i) of :func:`_point_table_bounds` — the table's bound on each
+    E_i and u, ν of each point without its table line — for the physical budget: the
+    interval from the points' other lines, each point's reach widened by its b_i
+    (:func:`uncertainty.extreme.max_abs_interval`'s ``bound``), which holds every table
+    within its MPE (the corner included). The draft's one budget (``one_budget``) keeps its
+    table lines in u (Annex A's reading, reproducible).
     """
     from gonio.result.statement import stated_nu
     from uncertainty.extreme import max_abs_interval
 
     # each point's ν as stated and as its k is computed (the integer part, ∞ above 1000;
     # GUM G.6.4): the interval is never narrower than one recomputed from the printed ν
-    r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
-                         [stated_nu(b.gum.dof) for b in budgets])
+    if table is not None and any(b > 0 for b in table[0]):
+        r = max_abs_interval(np.asarray(e_arcsec, dtype=float), table[1],
+                             [stated_nu(n) for n in table[2]], bound=table[0])
+    else:
+        table = None
+        r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
+                             [stated_nu(b.gum.dof) for b in budgets])
     e = np.abs(np.asarray(e_arcsec, dtype=float))
     at = int(np.argmax(e))                   # the first of equal largest |E_i|
     out = {"u_at_max_arcsec": float(budgets[at].u_c_arcsec),
@@ -1214,6 +1270,13 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False, positions=None) 
                     + " (Student t at nu as stated: its integer part, normal above 1000); "
                       ">= 95 % for every pattern of the true E_i "
                       "(Sidak below, the extreme point above) [beyond the draft]"}
+    if table is not None:
+        out["basis"] = out["basis"].replace(
+            "per point u_c and nu_eff",
+            "per point u and nu_eff without the table line, each reach widened by the "
+            "table's bound at the point, MPE*sum|c_p| (every table within the A.4.1 MPE, the "
+            "common zero and the 7.1 stops' errors shared by the points; JCGM 100 4.3.7)")
+        out["table_bound_arcsec"] = [float(b) for b in table[0]]
     if one_budget:
         b = budgets[0]
         out["u_c_arcsec"] = float(b.u_c_arcsec)

@@ -70,7 +70,7 @@ __all__ = [
     "CalibratedTable",
     "nonlinearity_calibrated_budget", "consistency_corrected_budget",
     "chamber_temperature_line",
-    "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
+    "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget", "range_table_bound",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
     "angle_deviation_budget", "repeatability_budget", "consistency_budget",
     "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo",
@@ -1236,11 +1236,14 @@ def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
     return RangeTableOrder(order, 0.5 * float(table_mpe_arcsec) * float(diam[order - 1]))
 
 
-#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the stated one (each position
-#: the 7.1 rounds reach rectangular ±MPE, independent, the common zero shared: K's model), the
-#: standard's per stop (each stop's turn independent, the zero inside it) and the physical one
-#: (one periodic error at the bound), the last two kept for comparison.
-TABLE_READINGS = ("stated", "standard", "periodic")
+#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the stated one (the table's
+#: worst shift of the range within the MPE, :func:`range_table_bound`, added to the noise
+#: belt's ends: it holds every table within its MPE), the positions independent (each
+#: position the 7.1 rounds reach rectangular ±MPE, the common zero shared: the stated one
+#: until the corner table was found to escape it), the standard's per stop (each stop's turn
+#: independent, the zero inside it) and one periodic error at the bound, the last three kept
+#: for comparison.
+TABLE_READINGS = ("stated", "independent", "standard", "periodic")
 
 #: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
 #: and its fixed seed (the same 7.1 data give the same K_l and u).
@@ -1277,6 +1280,39 @@ def range_table_positions(theta_deg, stop_deg=None, zero_deg=None):
         m[i, col[key(s_)]] += 1.0
         m[i, col[key(z_)]] -= 1.0
     return pos, m
+
+
+def range_table_bound(k_i, theta_deg, table_mpe_arcsec: float, stop_deg=None,
+                      zero_deg=None) -> float:
+    """The largest shift of K_l's range (draft 7.2), in %, that any table within its MPE can
+    give the 7.1 rounds: the half-width of K_l's table line in its stated reading
+    (:func:`nonlinearity_corrected_budget`), the analogue of K's MPE·Σ|c_p|
+    (:func:`scale_factor_table_bound_rel`, JCGM 100 4.3.7: a quantity known only by its
+    bound).
+
+    Round i's K_i moves by δ_i = 100·(K_i/K̄)·(e(s_i) − e(z_i))/θ_i % (A.4.1 applied to 7.1;
+    :func:`range_table_positions`: w_i·e with w_i its row over θ_i). A range moves by at most
+    the range of its shifts, |range(t + δ) − range(t)| ≤ max_{i,j}(δ_i − δ_j) (max(t + δ) ≤
+    max t + max δ, min(t + δ) ≥ min t + min δ), with equality for equal true K_i; δ_i − δ_j =
+    (w_i − w_j)·e is largest over the box |e_p| ≤ MPE at its vertex sign(w_i − w_j), so
+
+        D = MPE · max_{i,j} Σ_p |w_{i,p} − w_{j,p}|
+
+    (tests/test_kl_table_line.py checks it against every vertex of the box). The draft's stops
+    60°…360° zeroed at 0°: the 60° round against the 360° one (whose stop is its zero: no
+    table error), 2·MPE/60°: 9.26·10⁻⁵ % at MPE 0.1″ — the bound the one periodic error of
+    order 3 reaches (:func:`nonlinearity_table_order`, 2 × its half-range).
+
+    >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
+    >>> round(range_table_bound([3600.0] * 6, th, 0.1) * 1e5, 4)
+    9.2593
+    """
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    _, m = range_table_positions(th, stop_deg, zero_deg)
+    w = m / (th * ARCSEC_PER_DEG)[:, None] * (k_i / float(np.mean(k_i)))[:, None] * 100.0
+    spread = np.abs(w[:, None, :] - w[None, :, :]).sum(axis=2)
+    return float(table_mpe_arcsec) * float(spread.max())
 
 
 def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int,
@@ -1372,22 +1408,27 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance (JCGM 101
     6.4.8).
 
-    The table's errors (A.4.1 applied to 7.1; :func:`_range_table_errors`), stated
-    (``table_reading="stated"``): what the laboratory knows of its table is the MPE, so the
-    error at each position the rounds reach is rectangular ±MPE (JCGM 100 4.3.7), independent
-    from position to position, and round i, zeroed at z_i and stopped at s_i (``zero_deg``,
-    ``stop_deg``; None: zeroed at 0°, stopped at θ_i, the draft's 7.1), moves by
-    (e(s_i) − e(z_i))/θ_i: the common zero's error is shared by every round (correlated, and
-    not cancelling in the range, since it enters as 1/θ_i), the 360° stop is the zero itself
-    (:func:`range_table_positions`). This is K's model (:func:`scale_factor_table_u_rel`), so
-    K and K_l state one state of knowledge of one table. K_l is the range whose expected
-    measured range equals the one measured (:func:`uncertainty.stdev.corrected_range`), u the
-    estimator's spread there, one line ``K_rng``. One periodic error at the bound of the order
-    that spreads the K_i most (:func:`nonlinearity_table_order`) is named in the line's source
-    (the largest range it adds), not stated: a curve at the bound is a worst case, not the
-    laboratory's distribution of its table (as for K; docs/draft-readings.md 7.2).
-    ``standard`` (each stop's turn independent ±MPE, the zero inside it) and ``periodic`` (that
-    curve at the bound, phase drawn) compute each of those readings alone, for comparison.
+    The table's errors (A.4.1 applied to 7.1), stated (``table_reading="stated"``): what the
+    laboratory knows of its table is the MPE, and a table's errors are one curve, the same in
+    every round's reading (the corner — the zero at −MPE, every stop at +MPE — spreads the
+    K_i the same way every session; the rounds' scatter cannot see it). They are therefore
+    not drawn: the belt and the correction are computed from the other errors, and the
+    table enters as its bound, the largest shift of the range over every table within the
+    MPE (:func:`range_table_bound`, round i zeroed at z_i and stopped at s_i, ``zero_deg``,
+    ``stop_deg``; None: zeroed at 0°, stopped at θ_i, the draft's 7.1), added to each end of
+    the belt (a shift bounded draw by draw: the belt's ≥ 95 % holds for every table within
+    the MPE) and stated as the rectangular line ``K_tab`` of that half-width in u_c (JCGM 100
+    4.3.7, as K's ``P_K`` at MPE·Σ|c_p|, :func:`scale_factor_table_bound_rel`). K_l is the
+    range whose expected measured range equals the one measured
+    (:func:`uncertainty.stdev.corrected_range`; no correction for the table's shift, whose
+    sign is unknown), u the estimator's spread there (``K_rng``) with ``K_tab``. Beside it,
+    for comparison: ``independent`` (each position rectangular ±MPE independent of the
+    others, the common zero shared, drawn in the Monte Carlo: K's former per-position lines;
+    it covered the corner 35 of 40 times and one order-3 harmonic at the MPE 93.5 %),
+    ``standard`` (each stop's turn independent ±MPE, the zero inside it) and ``periodic``
+    (one curve at the bound of the worst order, :func:`nonlinearity_table_order`, phase
+    drawn). The draft's own reading (7.2, its range as measured with U) is
+    :func:`nonlinearity_budget`.
 
     The statement is one 95 % interval, not value ± k·u (skewed and bounded where the true
     range is a few σ of the errors): the range's confidence belt inverted at the measured
@@ -1396,23 +1437,23 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
 
     Examples
     --------
-    Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the errors alone (the
-    table per position, ±1 count over 60°) give 2.39·10⁻⁴ % on average, so K_l is negative,
-    stated by [0, upper]:
+    Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the count errors alone
+    (±1 count over 60°) give 2.34·10⁻⁴ % on average, so K_l is negative, stated by [0, upper],
+    the upper end moved out by the table's bound 0.926·10⁻⁴ %:
 
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> round(b.value * 1e4, 2), [round(x * 1e4, 2) for x in b.interval], round(b.u_c * 1e4, 2)
-    (-2.39, [0.0, 2.64], 1.07)
+    (-2.34, [0.0, 3.47], 1.2)
     >>> [c.symbol for c in b.components]
-    ['K_rng']
+    ['K_rng', 'K_tab']
 
     One round 0.5 counts/° above five equal ones: nearly the measured range, wider above:
 
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
-    (0.01389, 0.01377, [134.25, 143.22])
+    (0.01389, 0.01377, [133.49, 143.96])
     """
     from uncertainty.stdev import corrected_range
 
@@ -1421,20 +1462,26 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
     rng = np.random.default_rng(RANGE_SEED)
-    tab, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws,
-                                     table_reading, stop_deg, zero_deg)
+    if table_reading == "stated":          # the table enters as its bound, not drawn
+        tab, worst = np.zeros((draws, n)), nonlinearity_table_order(th, table_mpe_arcsec)
+    else:
+        tab, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws,
+                                         table_reading, stop_deg, zero_deg)
+    bound = range_table_bound(k_i, th, table_mpe_arcsec, stop_deg, zero_deg)
     quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
     k_i, errs, src = _round_errors(k_i, th, {table_reading: (tab + quant) * to_pct}, rng,
                                    draws, tilt_measured, tilt_round_coupling, noise, time_s)
     c = corrected_range(k_i * to_pct, errs[table_reading])
     tab_src = {
-        "stated": "table angle at every position the rounds reach (A.4.1 per position, "
-                  "rectangular ±MPE, independent, the common zero shared by every round)",
+        "stated": "the table's angle errors not drawn: they enter as the line K_tab",
+        "independent": "table angle at every position the rounds reach (A.4.1 per position, "
+                       "rectangular ±MPE, independent, the common zero shared by every "
+                       "round)",
         "standard": "table angle at the stops (A.4.1 per stop, independent rectangular ±MPE, "
                     "the zero inside each stop's error)",
         "periodic": f"table angle from one periodic error at the A.4.1 bound, order "
                     f"{worst.order}, phase drawn, rounds correlated"}[table_reading]
-    if table_reading == "stated":
+    if table_reading == "independent":
         tab_src += (f"; one periodic error at the bound of the order that spreads the K_i most "
                     f"(order {worst.order}) would add up to "
                     f"{200.0 * worst.half_range_rel:.3g} % to the range (a worst case, not "
@@ -1446,6 +1493,21 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                  f"{c.value:.4g} %"),
                    "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")]
     lo, hi = c.interval
+    if table_reading == "stated":
+        # every table within its MPE moves the range by at most ``bound`` draw by draw, so
+        # the noise belt's ends moved out by it hold K_l for every such table (≥ 95 %)
+        lo, hi = max(0.0, lo - bound), hi + bound
+        lines.append(_Line(type_b(
+            "K_tab", 0.0, bound, "rectangular",
+            source=f"table angle at every position the 7.1 rounds reach within the A.4.1 MPE: "
+                   f"the largest shift of the range over every table within it, MPE·max_ij "
+                   f"Σ_p|w_ip − w_jp| = {bound:.3g} % (the common zero shared, the 360° stop "
+                   f"cancelling; JCGM 100 4.3.7: known by its bound), added to each end of the "
+                   f"noise's belt [{c.interval[0]:.4g}, {c.interval[1]:.4g}] %; one periodic "
+                   f"error of order {worst.order} at the bound reaches "
+                   f"{200.0 * worst.half_range_rel:.3g} %; the positions drawn independent "
+                   f"(the former stated reading) do not hold the corner table"),
+            "table angle errors within the MPE, bound", True, "7.2 (A.4.1 applied to 7.1)"))
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)

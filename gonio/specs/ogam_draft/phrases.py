@@ -446,14 +446,18 @@ LABELS: dict[str, dict[str, str]] = {
                                 "U = {U}″，k = {k}，包含概率{p}"},
     "E_by_interval": {
         "en": "E = ± max|E_i| is stated by the 95 % coverage interval of the largest true |E_i|, "
-              "[{lo}, {hi}]″: [max(0, max_i(|E_i| − c_L u_i)), max_i(|E_i| + c_H u_i)] from each "
-              "point's E_i and u_i, which holds for every pattern of the true E_i (beyond the "
-              "draft). The draft's reading as measured (none of the corrections beyond the draft), "
+              "[{lo}, {hi}]″: [max(0, max_i(|E_i| − c_L u_i − b_i)), max_i(|E_i| + c_H u_i + "
+              "b_i)] from each point's E_i, u_i and b_i, the bound of the table's error at the "
+              "point (MPE·Σ|c_p| over the point, the zero and the 7.1 stops; 0 where the table "
+              "is calibrated or under the draft's one budget), which holds for every pattern of "
+              "the true E_i and every table within its MPE (beyond the draft). The draft's reading as measured (none of the corrections beyond the draft), "
               "max|E_i| ± U (7.4, Annex A): {E} ± {U}″ (k = {k}), given beside and not "
               "certified.",
         "zh": "E = ± max|E_i| 以最大真值 |E_i| 的 95 % 包含区间 [{lo}, {hi}]″ 表述："
-              "[max(0, max(|E_i| − c_L u_i)), max(|E_i| + c_H u_i)]（对各点取最大），由各点 E_i 与 u_i 求得，"
-              "对真值 E_i 的任何分布形态均成立（草案以外）。按规范草案的理解（测得值，未作草案以外的"
+              "[max(0, max(|E_i| − c_L u_i − b_i)), max(|E_i| + c_H u_i + b_i)]（对各点取最大），"
+              "由各点 E_i、u_i 及 b_i 求得，b_i 为该点转台误差的界（该点、零位及 7.1 各停止位置的"
+              "最大允许误差乘 Σ|c_p|；转台经校准或按草案同一评定时为 0），对真值 E_i 的任何分布形态及"
+              "最大允许误差以内的任何转台均成立（草案以外）。按规范草案的理解（测得值，未作草案以外的"
               "修正）max|E_i| ± U（7.4，附录A）：{E} ± {U}″（k = {k}），仅供参考，不作为校准结果。"},
     "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
