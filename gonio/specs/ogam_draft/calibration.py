@@ -1130,11 +1130,7 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;
     # the longest time to reading) stay those of Annex A's reading, not this point's
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
-    bounds = _point_table_bounds(pos, sub, stops, settings["table_mpe_arcsec"])
-    if any(b > 0 for b in bounds[0]):
-        points = tuple(dict(d, table_bound_arcsec=b, u_without_table_arcsec=u,
-                            nu_without_table=None if math.isinf(n) else n)
-                       for d, b, u, n in zip(points, *bounds))
+    points, bounds = _with_table_bounds(points, pos, sub, stops, settings["table_mpe_arcsec"])
     return dataclasses.replace(sub[at], points=points, parameters=params,
                                max_interval=e_max_interval(pts["E_arcsec"], sub,
                                                            positions=pos, table=bounds))
@@ -1143,6 +1139,17 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
 #: The source marking a 7.4 point's table line at the MPE where E's angles come from counts
 #: through the 7.1 K (:func:`_point_table_line`), which E's extreme takes by its bound.
 _MPE_TABLE_LINE = "[physical budget: P and K_P as one line]"
+
+
+def _with_table_bounds(points, pos, budgets, stops, mpe_arcsec: float):
+    """The per-point dicts ``points`` with the table's bound, u and ν without the table line
+    (:func:`_point_table_bounds`) where some point has one, and those bounds."""
+    bounds = _point_table_bounds(pos, budgets, stops, mpe_arcsec)
+    if any(b > 0 for b in bounds[0]):
+        points = tuple(dict(d, table_bound_arcsec=b, u_without_table_arcsec=u,
+                            nu_without_table=None if math.isinf(n) else n)
+                       for d, b, u, n in zip(points, *bounds))
+    return points, bounds
 
 
 def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float):

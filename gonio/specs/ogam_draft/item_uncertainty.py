@@ -1377,6 +1377,23 @@ def _round_errors(k_i, th, errs, rng, draws: int, tilt_measured, tilt_round_coup
     return k_i, errs, src
 
 
+def _range_table_line(bound: float, belt, worst: RangeTableOrder) -> _Line:
+    """K_l's table line ``K_tab`` (:func:`nonlinearity_corrected_budget`): rectangular with
+    the half-width ``bound`` of :func:`range_table_bound` (JCGM 100 4.3.7), its source naming
+    the noise's belt ``belt`` it widens and the worst order's range beside."""
+    return _Line(type_b(
+        "K_tab", 0.0, bound, "rectangular",
+        source=f"table angle at every position the 7.1 rounds reach within the A.4.1 MPE: "
+               f"the largest shift of the range over every table within it, MPE·max_ij "
+               f"Σ_p|w_ip − w_jp| = {bound:.3g} % (the common zero shared, the 360° stop "
+               f"cancelling; JCGM 100 4.3.7: known by its bound), added to each end of the "
+               f"noise's belt [{belt[0]:.4g}, {belt[1]:.4g}] %; one periodic error of order "
+               f"{worst.order} at the bound reaches {200.0 * worst.half_range_rel:.3g} %; the "
+               f"positions drawn independent (the former stated reading) do not hold the "
+               f"corner table"),
+        "table angle errors within the MPE, bound", True, "7.2 (A.4.1 applied to 7.1)")
+
+
 def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
                                   noise: RoundNoise | None = None, time_s=None,
@@ -1408,27 +1425,21 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance (JCGM 101
     6.4.8).
 
-    The table's errors (A.4.1 applied to 7.1), stated (``table_reading="stated"``): what the
-    laboratory knows of its table is the MPE, and a table's errors are one curve, the same in
-    every round's reading (the corner — the zero at −MPE, every stop at +MPE — spreads the
-    K_i the same way every session; the rounds' scatter cannot see it). They are therefore
-    not drawn: the belt and the correction are computed from the other errors, and the
-    table enters as its bound, the largest shift of the range over every table within the
-    MPE (:func:`range_table_bound`, round i zeroed at z_i and stopped at s_i, ``zero_deg``,
-    ``stop_deg``; None: zeroed at 0°, stopped at θ_i, the draft's 7.1), added to each end of
-    the belt (a shift bounded draw by draw: the belt's ≥ 95 % holds for every table within
-    the MPE) and stated as the rectangular line ``K_tab`` of that half-width in u_c (JCGM 100
-    4.3.7, as K's ``P_K`` at MPE·Σ|c_p|, :func:`scale_factor_table_bound_rel`). K_l is the
+    The table's errors (A.4.1 applied to 7.1), stated (``table_reading="stated"``): known by
+    the MPE, one curve for every round (the corner — zero at −MPE, every stop at +MPE —
+    spreads the K_i alike each session: the scatter cannot see it), so not drawn: the belt
+    and correction come from the other errors, and the table's largest shift of the range
+    within the MPE (:func:`range_table_bound`; rounds zeroed at ``zero_deg``, stopped at
+    ``stop_deg``; None: the draft's 7.1) moves each end of the belt out (bounded draw by draw:
+    ≥ 95 % for every table within the MPE) and is the rectangular line ``K_tab`` in u_c
+    (JCGM 100 4.3.7, as K's MPE·Σ|c_p|, :func:`scale_factor_table_bound_rel`). K_l is the
     range whose expected measured range equals the one measured
-    (:func:`uncertainty.stdev.corrected_range`; no correction for the table's shift, whose
-    sign is unknown), u the estimator's spread there (``K_rng``) with ``K_tab``. Beside it,
-    for comparison: ``independent`` (each position rectangular ±MPE independent of the
-    others, the common zero shared, drawn in the Monte Carlo: K's former per-position lines;
-    it covered the corner 35 of 40 times and one order-3 harmonic at the MPE 93.5 %),
-    ``standard`` (each stop's turn independent ±MPE, the zero inside it) and ``periodic``
-    (one curve at the bound of the worst order, :func:`nonlinearity_table_order`, phase
-    drawn). The draft's own reading (7.2, its range as measured with U) is
-    :func:`nonlinearity_budget`.
+    (:func:`uncertainty.stdev.corrected_range`; the table's shift, of unknown sign, not
+    corrected), ``K_rng`` the estimator's spread. Beside, for comparison: ``independent``
+    (each position ±MPE drawn, the zero shared: the former statement; it covered the corner
+    35/40 and the worst harmonic 187/200), ``standard`` (each stop's turn ±MPE, the zero
+    inside) and ``periodic`` (one curve at the bound, :func:`nonlinearity_table_order`). The
+    draft's own reading (7.2) is :func:`nonlinearity_budget`.
 
     The statement is one 95 % interval, not value ± k·u (skewed and bounded where the true
     range is a few σ of the errors): the range's confidence belt inverted at the measured
@@ -1497,17 +1508,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         # every table within its MPE moves the range by at most ``bound`` draw by draw, so
         # the noise belt's ends moved out by it hold K_l for every such table (≥ 95 %)
         lo, hi = max(0.0, lo - bound), hi + bound
-        lines.append(_Line(type_b(
-            "K_tab", 0.0, bound, "rectangular",
-            source=f"table angle at every position the 7.1 rounds reach within the A.4.1 MPE: "
-                   f"the largest shift of the range over every table within it, MPE·max_ij "
-                   f"Σ_p|w_ip − w_jp| = {bound:.3g} % (the common zero shared, the 360° stop "
-                   f"cancelling; JCGM 100 4.3.7: known by its bound), added to each end of the "
-                   f"noise's belt [{c.interval[0]:.4g}, {c.interval[1]:.4g}] %; one periodic "
-                   f"error of order {worst.order} at the bound reaches "
-                   f"{200.0 * worst.half_range_rel:.3g} %; the positions drawn independent "
-                   f"(the former stated reading) do not hold the corner table"),
-            "table angle errors within the MPE, bound", True, "7.2 (A.4.1 applied to 7.1)"))
+        lines.append(_range_table_line(bound, c.interval, worst))
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
