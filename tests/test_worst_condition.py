@@ -157,12 +157,17 @@ def test_nonlinearity_z_on_drawn_type_b_effects(drawn_k_l):
     assert z_draft.mean() > 0.8 and z_draft.std(ddof=1) < 0.7
 
 
+@pytest.mark.xfail(strict=True, reason="K_l holds every table within the MPE (the table's worst "
+                   "shift of the range on the belt's ends, K_tab): over-wide on drawn tables, "
+                   "the price K's table line pays too (docs/validation-optical.md)")
 def test_nonlinearity_z_not_over_wide_on_drawn_type_b_effects(drawn_k_l):
     """z's sd at least 0.7 on drawn Type B effects (too wide is a fault as well): 0.83 on
     seeds 700–739 (z mean +0.03, 40 of 40 covered) with the table's errors taken as K's (each
-    position rectangular ±MPE, the zero shared);
-    0.44 when u held the table at its A.4.1 bound of the worst order (the ``K_tab`` line, a
-    strict xfail until then)."""
+    position rectangular ±MPE, the zero shared), which missed the corner table (35/40 in the
+    study); 0.44 when u held the table at its A.4.1 bound of the worst order. Since K_l takes
+    the table by its bound on the belt's ends (every table within the MPE held), over-wide
+    again on these drawn tables (the study's `typeb`: z sd 0.47): a strict xfail, which
+    fails once the width is regained without losing the corner."""
     z = drawn_k_l[0]
     assert z.std(ddof=1) >= 0.7, z.std(ddof=1)
 
