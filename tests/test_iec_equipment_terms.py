@@ -79,14 +79,15 @@ def test_chamber_deviation_at_t_base_in_a_base_and_bias(iec_noise_free):
     K = g.scale_factor_at(T, g.supply_nominal_v)
     k_rel = np.polyfit(T, K, 1)[0] / K.mean()
     assert r.metadata["chamber_deviation_bound_c"] == "2.0"
-    assert _comp(r.items["scale_factor"], "e_T")["u"] == pytest.approx(
+    assert r.metadata["chamber_uniformity_c"] == "0.0"       # the ideal chamber: e_TU = ±2 °C
+    assert _comp(r.items["scale_factor"], "e_TU")["u"] == pytest.approx(
         2.0 / math.sqrt(3) * abs(k_rel), rel=2e-3)
-    assert _comp(r.items["initial_sf_variation"], "e_T")["u"] == pytest.approx(
+    assert _comp(r.items["initial_sf_variation"], "e_TU")["u"] == pytest.approx(
         2.0 / math.sqrt(3) * abs(k_rel), rel=2e-3)
     Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
                    if s["test"] == "bias_temperature"], float)
     b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
-    assert _comp(r.items["bias"], "e_T")["u"] == pytest.approx(
+    assert _comp(r.items["bias"], "e_TU")["u"] == pytest.approx(
         2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
     # both enter u_c: the scale factor's relative u_c holds the chamber term in quadrature
     sf = r.items["scale_factor"]
@@ -134,7 +135,7 @@ def test_chamber_uniformity_in_a_base(iec_noise_free):
     from gonio.specs.iec62047_20 import calibrate
 
     r0, b, res, p = iec_noise_free
-    assert _comp(r0.items["scale_factor"], "e_U")["u"] == 0.0    # the ideal chamber states 0
+    u0 = _comp(r0.items["scale_factor"], "e_TU")["u"]    # the ideal chamber: ±2 °C alone
     md = {k: str(v) for k, v in res.metadata.items()}
     md.update(chamber_uniformity_c=repr(b.equipment.chamber.uniformity_c))   # the bench's 0.4
     keep = res.data["test"].isin(["scale_factor", "sf_temperature"])
@@ -145,9 +146,14 @@ def test_chamber_uniformity_in_a_base(iec_noise_free):
     K = g.scale_factor_at(T, g.supply_nominal_v)
     k_rel = np.polyfit(T, K, 1)[0] / K.mean()
     half = 0.2
+    # the deviation's ±2 °C and the place's ±0.2 °C: both bounded, allowed at once, so one
+    # rectangular line of the summed half-width (not their quadrature)
     for item in ("scale_factor", "initial_sf_variation"):
-        assert _comp(r.items[item], "e_U")["u"] == pytest.approx(
-            half / math.sqrt(3) * abs(k_rel), rel=2e-3)
+        assert _comp(r.items[item], "e_TU")["u"] == pytest.approx(
+            (2.0 + half) / math.sqrt(3) * abs(k_rel), rel=2e-3)
+        assert _comp(r.items[item], "e_TU")["u"] > \
+            math.hypot(2.0, half) / math.sqrt(3) * abs(k_rel) * 1.05
+    assert u0 == pytest.approx(2.0 / math.sqrt(3) * abs(k_rel), rel=2e-3)
     eq = Equipment(chamber=Chamber(uniformity_c=0.4))
     pos = np.array([draw_equipment(eq, s).chamber.position_offset() for s in range(3000)])
     assert np.abs(pos).max() <= 0.2 and np.var(pos) == pytest.approx(0.2 ** 2 / 3, rel=0.08)
@@ -157,13 +163,13 @@ def test_chamber_uniformity_in_a_base(iec_noise_free):
 def test_chamber_uniformity_in_the_bias(iec_noise_free):
     """Review of stop 30: the place in the volume moves the gyro's temperature, hence its
     bias by place × b'(T); the bias (and the initial bias variation, which reuses it)
-    carries e_U = ± half the uniformity, rectangular × the bench's b(T) slope over the
-    5.3.3.6 visits. Mutation: e_U taken out of the bias budget fails here."""
+    carries it in e_TU = ±(deviation bound + half the uniformity), rectangular × the bench's
+    b(T) slope over the 5.3.3.6 visits. Mutation: the uniformity taken out fails here."""
     from gonio.formats.rate_readings import RateReadings
     from gonio.specs.iec62047_20 import calibrate
 
     r0, b, res, p = iec_noise_free
-    assert _comp(r0.items["bias"], "e_U")["u"] == 0.0              # the ideal chamber states 0
+    u0 = _comp(r0.items["bias"], "e_TU")["u"]                     # the ideal chamber: ±2 °C
     md = {k: str(v) for k, v in res.metadata.items()}
     md.update(chamber_uniformity_c="4.0")
     keep = res.data["test"].isin(["scale_factor", "bias", "bias_temperature", "static"])
@@ -172,8 +178,9 @@ def test_chamber_uniformity_in_the_bias(iec_noise_free):
     Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
                    if s["test"] == "bias_temperature"], float)
     b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
-    assert _comp(r.items["bias"], "e_U")["u"] == pytest.approx(
-        2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+    assert u0 == pytest.approx(2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+    assert _comp(r.items["bias"], "e_TU")["u"] == pytest.approx(
+        (2.0 + 2.0) / math.sqrt(3) * abs(b_tc), rel=2e-2)
     assert r.items["bias"].uncertainty.u_c > r0.items["bias"].uncertainty.u_c
     assert r.items["initial_bias_variation"].uncertainty.u_c == r.items["bias"].uncertainty.u_c
 
@@ -253,3 +260,68 @@ def test_ratiometric_budget_holds_the_fluctuation(iec_noise_free):
     r0 = iec_noise_free[0]
     assert "ratiometric_error" not in r0.items or not r0.items["ratiometric_error"].measured \
         or _comp(r0.items["ratiometric_error"], "fluct")["u"] == 0.0
+
+
+def test_sf_temperature_coefficient_carries_correlated_deviations(iec_noise_free):
+    """5.1.3.4: the chamber's set-point deviations in any pattern within ±2 °C (Table 2 bounds
+    each, not their correlation): the line's half-width is the largest slope change over
+    every sign pattern (enumerated here with numpy.polyfit on the item's own K_i(T_i)),
+    rectangular; the independent reading stays in the details, smaller."""
+    import itertools
+
+    r, _, _, _ = iec_noise_free
+    it = r.items["sf_temperature_coefficient"]
+    T, K = np.asarray(it.details["temperatures_c"], float), np.asarray(it.details["K_i"], float)
+    slope = np.polyfit(T, K, 1)[0]
+    h = max(abs(np.polyfit(T, K + slope * 2.0 * np.array(s), 1)[0] - slope)
+            for s in itertools.product((-1.0, 1.0), repeat=T.size))
+    ib = int(np.argmin(np.abs(T - 22.5)))
+    assert _comp(it, "dT")["u"] == pytest.approx(h / math.sqrt(3), rel=1e-6)
+    assert it.details["u_dT_independent"]["u"] < 0.7 * h / math.sqrt(3)
+    # the item (in %/°C) holds it: u_c ≥ the line's 100·u/a_BASE
+    assert it.uncertainty.u_c >= 100 * h / math.sqrt(3) / K[ib] * 0.999
+
+
+def test_noise_items_carry_the_chamber_fluctuation(iec_noise_free):
+    """5.4.5.1 b), c): the fluctuation's amplitude × the bias temperature coefficient (here
+    the bench's b(T) slope over the 5.3.3.6 visits) through the in-band Welch estimate; 0 where
+    the readings state no fluctuation. The in-band line against a Welch estimate of the
+    sinusoid at 37 phases (scipy.signal.welch); proportional to the stated amplitude."""
+    from scipy import signal
+
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs.iec62047_20 import calibrate
+
+    from gonio.specs.iec62047_20.simulate import simulate
+
+    _, b, _, p = iec_noise_free
+    res = simulate(b, p, seed=3, noise=True)        # the bench file's chamber (0.3 °C)
+    md = {k: str(v) for k, v in res.metadata.items()}
+    md.update(chamber_fluctuation_c="1.0", chamber_fluctuation_period_s="900.0")
+    keep = res.data["test"].isin(["scale_factor", "sf_temperature", "bias", "bias_temperature",
+                                  "static"])
+    r = calibrate(RateReadings(res.data[keep], md), p)
+    g = b.gyro
+    Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
+                   if s["test"] == "bias_temperature"], float)
+    amp = abs(np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]) * 1.0
+    st = res.data[res.data["test"] == "static"]
+    t = st["time_s"].to_numpy(float)
+    dt = float(np.median(np.diff(t)))
+    n = t.size
+    nper = min(4096, n)
+    tt = np.arange(n) * dt
+    band = []
+    for ph in np.linspace(0, np.pi, 37):
+        f, ps = signal.welch(amp * np.sin(2 * np.pi * tt / 900.0 + ph), fs=1 / dt, nperseg=nper)
+        sel = (f > 0) & (f <= 1.0)
+        band.append(float(np.trapezoid(ps[sel], f[sel])))
+    it = r.items["inband_noise"]
+    rms = it.value
+    h = rms - math.sqrt(max(rms ** 2 - max(band), 0.0))
+    assert _comp(it, "fluct")["u"] == pytest.approx(h / math.sqrt(3), rel=0.02)
+    assert _comp(it, "fluct")["u"] > 0
+    md.update(chamber_fluctuation_c="0.0")
+    r0 = calibrate(RateReadings(res.data[keep], md), p)
+    assert _comp(r0.items["inband_noise"], "fluct")["u"] == 0.0
+    assert _comp(r0.items["broadband_noise"], "fluct")["u"] == 0.0

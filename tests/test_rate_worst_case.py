@@ -35,12 +35,18 @@ def test_worst_equipment_sits_at_the_bounds_of_the_bench_file():
     raw = _bench_file_equipment()                 # the bench file as written, not gonio's model
     eq = load_rate_bench("mems-adxrs610").equipment
     w = worst_equipment(eq, 11, temperature_split_c=20.0, cross_axis=(0.01, -0.008))
-    # certificates' U (k = 2): the table's equals Table 2's 0.05 %
-    assert w.rate_table.rate_error_rel == pytest.approx(2 * raw["rate_table_u_rel"])
-    assert w.rate_table.rate_error_rel == pytest.approx(TABLE2_RATE)
-    assert w.acquisition.gain_error_rel == pytest.approx(2 * raw["acquisition_u_rel"])
-    # both raise the indicated K: the same sign
-    assert np.sign(w.rate_table.rate_error_rel) == np.sign(w.acquisition.gain_error_rel)
+    # the normal-certificate errors (the table's rate, the voltmeter's gain) are not bounds:
+    # drawn per trial from their certificates, the same draw as typeb's from the same seed
+    d0 = draw_equipment(eq, 11)
+    assert w.rate_table.rate_error_rel == d0.rate_table.rate_error_rel
+    assert w.acquisition.gain_error_rel == d0.acquisition.gain_error_rel
+    rates = np.array([worst_equipment(eq, s, temperature_split_c=20.0).rate_table.rate_error_rel
+                      for s in range(400)])
+    gains = np.array([worst_equipment(eq, s, temperature_split_c=20.0).acquisition.gain_error_rel
+                      for s in range(400)])
+    assert np.std(rates) == pytest.approx(raw["rate_table_u_rel"], rel=0.15)
+    assert np.std(gains) == pytest.approx(raw["acquisition_u_rel"], rel=0.15)
+    assert abs(np.mean(rates)) < 3 * raw["rate_table_u_rel"] / 20
     # the chamber: every set point at ± the bound, + above the split, − at or below
     b = raw["chamber_deviation_bound_c"]
     assert b == TABLE2_DEVIATION_C
@@ -109,7 +115,8 @@ def test_a_worst_trial_runs_at_the_bounds(worst_trials):
         __import__("gonio.pipeline.coverage", fromlist=["x"]).case_stream(spec, "worst")
     for readings, truth in trials:
         e = truth["equipment"]
-        assert e["rate_table"]["rate_error_rel"] == pytest.approx(TABLE2_RATE)
+        # the table's rate error is drawn from its certificate (not held at its 2u)
+        assert e["rate_table"]["rate_error_rel"] != pytest.approx(TABLE2_RATE)
         assert e["chamber"]["fluctuation_c"] == TABLE2_FLUCTUATION_C
         # the readings state the ripple at its bound: the budget is given what the table is
         assert float(readings.metadata["rate_table_ripple_rel"]) == TABLE2_RATE
@@ -148,6 +155,25 @@ def test_a_budget_without_its_chamber_line_under_covers_at_the_bound(worst_trial
         assert not lo0 <= t <= hi0                  # the mutated budget misses the truth
         assert lo < lo0 and hi > hi0                # the line widens the interval
         assert lo0 > t                              # read high: the span is stretched
+
+
+def test_k_t_line_adds_the_bounds_linearly(worst_trials):
+    """The gyro's temperature error at a set point is one rectangular line of half-width
+    deviation bound + half the uniformity (both bounded, both at their bounds at once in this
+    case): readings stating (2 °C, 2 °C) give the same K_t statement as (3 °C, 0 °C), a
+    quadrature of two lines would equal (√5 °C, 0 °C) instead; and the worst trial's
+    readings state Table 2's uniformity."""
+    spec, proto, trials = worst_trials
+    readings, truth = trials[0]
+    assert float(readings.metadata["chamber_uniformity_c"]) == TABLE2_UNIFORMITY_C
+    a = _kt(spec, proto, readings, truth, chamber_deviation_bound_c="2.0",
+            chamber_uniformity_c="2.0")[0]
+    b = _kt(spec, proto, readings, truth, chamber_deviation_bound_c="3.0",
+            chamber_uniformity_c="0.0")[0]
+    q = _kt(spec, proto, readings, truth, chamber_deviation_bound_c=repr(math.sqrt(5.0)),
+            chamber_uniformity_c="0.0")[0]
+    assert a == pytest.approx(b, rel=1e-12)
+    assert a[1] - a[0] > (q[1] - q[0]) * 1.02
 
 
 def test_validate_reports_both_cases(capsys):

@@ -266,21 +266,32 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
 TABLE2_RATE_SMOOTHNESS_REL = 5.0e-4
 TABLE2_CHAMBER_FLUCTUATION_C = 1.0
 TABLE2_CHAMBER_UNIFORMITY_C = 2.0
-#: The coverage factor of the certificates whose standard uncertainty the bench states for
-#: the rate table's rate and the voltmeter's gain: the worst case puts each error at the
-#: certificate's expanded uncertainty k·u (for the table: 2 × 2.5e-4 = Table 2's 0.05 %).
-CERTIFICATE_K = 2.0
+#: The worst-condition rule (one rule for every study of the rate family, and the optical
+#: draft's: its tilt at the bound with the worst azimuth, the others drawn): an effect the
+#: procedure BOUNDS (a rectangular line: the chamber's deviation at each set point, the gyro's
+#: place in the volume, its misalignment in the fixture; the amplitudes the readings state,
+#: Table 2's fluctuation, uniformity and smoothness) sits at its bound with the sign that moves
+#: the items most, all at once (the procedure allows them at once); an effect known by a
+#: NORMAL certificate (the rate table's rate, the voltmeter's gain: u stated, k = 2) has no
+#: bound — its certificate's U is a 95 % value of a state of knowledge, not a limit — and is
+#: drawn from that certificate per trial, as in ``typeb``.
+WORST_RULE = ("bounded effects (rectangular lines and the readings' stated amplitudes) at "
+              "their bounds with the worst sign, all at once; normal-certificate effects "
+              "(rate table's rate, voltmeter's gain) drawn from their certificates; phases "
+              "drawn")
 
 
 def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
                     cross_axis: tuple[float, float] = (0.0, 0.0)) -> Equipment:
-    """``eq`` with every error :func:`draw_equipment` draws put at the bound the procedure
-    allows, at the sign that moves the items most (the coverage studies' ``worst`` case):
+    """``eq`` with every BOUNDED error :func:`draw_equipment` draws put at the bound the
+    procedure allows, at the sign that moves the items most, and the normal-certificate
+    errors drawn (the coverage studies' ``worst`` case, the rule :data:`WORST_RULE`):
 
-    - the rate table's relative rate error at + ``CERTIFICATE_K``·``rate_table_u_rel``
-      (the certificate's U, Table 2's 0.05 %) and the voltmeter's gain error at
-      + ``CERTIFICATE_K``·``acquisition_u_rel``: the same sign, so that both raise the
-      indicated scale factor (their effects on K add; either common sign is as bad);
+    - the rate table's relative rate error and the voltmeter's gain error: drawn from their
+      certificates (normal, σ = ``rate_table_u_rel``, ``acquisition_u_rel``) exactly as
+      :func:`draw_equipment` draws them from ``seed`` — a normal certificate's 2u is not a
+      bound, and a k = 2 budget whose line is that certificate's u cannot cover a condition
+      that fixes the line at 2u where it dominates (JJF K and B_0 covered 0.60–0.75 so);
     - the chamber's deviation at ± ``chamber_deviation_bound_c`` at every set point:
       + above ``temperature_split_c`` and − at or below it
       (:attr:`Chamber.deviation_split_c`), which stretches every temperature span that
@@ -306,8 +317,9 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
     so each budget sees the bound it is given. Same seed → same equipment.
 
     >>> w = worst_equipment(Equipment(), 3, temperature_split_c=20.0, cross_axis=(0.01, -0.008))
-    >>> w.rate_table.rate_error_rel, w.acquisition.gain_error_rel
-    (0.0005, 6e-05)
+    >>> d = draw_equipment(Equipment(), 3)
+    >>> (w.rate_table.rate_error_rel, w.acquisition.gain_error_rel) == (d.rate_table.rate_error_rel, d.acquisition.gain_error_rel)
+    True
     >>> w.chamber.deviation_at(70.0), w.chamber.deviation_at(-40.0), w.fixture
     (2.0, -2.0, Fixture(misalignment_x_deg=0.05, misalignment_y_deg=0.05))
     >>> w.chamber.fluctuation_phase_deg == draw_equipment(Equipment(), 3).chamber.fluctuation_phase_deg
@@ -319,11 +331,11 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
     uni = max(eq.chamber.uniformity_c, TABLE2_CHAMBER_UNIFORMITY_C)
     return replace(
         eq, rate_table=replace(eq.rate_table,
-                               rate_error_rel=CERTIFICATE_K * eq.rate_table_u_rel,
+                               rate_error_rel=drawn.rate_table.rate_error_rel,
                                ripple_rel=max(eq.rate_table.ripple_rel,
                                               TABLE2_RATE_SMOOTHNESS_REL),
                                ripple_phase_deg=drawn.rate_table.ripple_phase_deg),
-        acquisition=replace(eq.acquisition, gain_error_rel=CERTIFICATE_K * eq.acquisition_u_rel),
+        acquisition=replace(eq.acquisition, gain_error_rel=drawn.acquisition.gain_error_rel),
         chamber=replace(eq.chamber, point_deviation_c=eq.chamber_deviation_bound_c,
                         deviation_split_c=float(temperature_split_c),
                         fluctuation_c=max(eq.chamber.fluctuation_c,

@@ -50,14 +50,16 @@ STUDY_CASES = {
              "per set point uniform within +-2 C, the fixture misalignment uniform within "
              "+-0.05 deg, the gyro's place in the volume, the phases of the chamber's "
              "fluctuation and of the table's ripple",
-    "worst": "every Type B effect at its bound (gonio.bench.equipment.worst_equipment): the "
-             "table's rate error and the voltmeter's gain at +2u (the certificates' U; Table "
-             "2's 0.05 % for the table), both raising K; the chamber's deviation +2 C at "
-             "every set point above the gyro's reference temperature and -2 C at or below it "
-             "(every temperature span across it stretched); the chamber's fluctuation and "
-             "uniformity and the table's ripple at Table 2's 1 C, 2 C and 0.05 % (the gyro "
-             "at the volume's warm end); the fixture misalignment at +-0.05 deg with the sign "
-             "of the gyro's cross-axis sensitivity; the two phases drawn per trial as in typeb",
+    "worst": "every BOUNDED Type B effect at its bound, all at once "
+             "(gonio.bench.equipment.worst_equipment, WORST_RULE): the chamber's deviation "
+             "+2 C at every set point above the gyro's reference temperature and -2 C at or "
+             "below it (every temperature span across it stretched); the chamber's "
+             "fluctuation and uniformity and the table's ripple at Table 2's 1 C, 2 C and "
+             "0.05 % (the gyro at the volume's warm end); the fixture misalignment at "
+             "+-0.05 deg with the sign of the gyro's cross-axis sensitivity; the "
+             "normal-certificate effects (the table's rate error, the voltmeter's gain) and "
+             "the two phases drawn per trial as in typeb (a normal certificate's 2u is not a "
+             "bound)",
 }
 
 

@@ -655,3 +655,26 @@ def record_difference_u_coef(k2: float, b2: float, first: tuple[float, float],
     lag = np.abs(pts[:, None] - pts[None, :])
     var = float(c @ generalised_covariance(lag, [0.0, 0.0, b2, k2], 1.0) @ c)
     return math.sqrt(max(var, 0.0))
+
+
+#: The source text of the budgets' line for the gyro's temperature error at a chamber set point.
+TEMPERATURE_BOUND_SOURCE = ("the gyro's temperature error at the set point: the chamber's "
+                            "deviation (± bound) and the gyro's place in its volume (± half "
+                            "the uniformity, JJF Table 2), both bounded and allowed at once, "
+                            "their bounds added linearly")
+
+
+def gyro_temperature_bound_c(deviation_bound_c: float, uniformity_c: float) -> float:
+    """Half-width (°C) of the gyro's temperature error at a chamber set point: the chamber's
+    deviation bound plus half its uniformity (JJF 1535 Table 2: ±2 °C and 2 °C; IEC 62047-20
+    5.1.4.1 refers to the chamber's stated conditions). Both are bounded effects the
+    procedure allows at once (the chamber at its deviation, the gyro at the volume's warm
+    end), so their bounds add linearly into one rectangular line: u = (δ + U/2)/√3, not the
+    quadrature √(δ² + (U/2)²)/√3 of two independent lines, which a condition with both at
+    their bounds exceeds (the rate studies' worst case: IEC a_BASE covered 0.000, JJF K_t
+    0.625 with the uniformity missing).
+
+    >>> gyro_temperature_bound_c(2.0, 2.0), gyro_temperature_bound_c(2.0, 0.0)
+    (3.0, 2.0)
+    """
+    return float(deviation_bound_c) + 0.5 * float(uniformity_c)

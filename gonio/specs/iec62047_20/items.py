@@ -205,12 +205,20 @@ def _u_rel_sf(ctx: Context, c: dict) -> list:
                    source="least-squares slope, from the noise of the point means"),
             from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B", source="rate table, relative"),
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
-            type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(sf_tc_rel(ctx)), "rectangular",
-                   source="chamber deviation at T_BASE (± bound) × T_c,SF/a of 5.1.3.4's "
-                          "runs (0 without them)"),
-            type_b("e_U", 0.0, 0.5 * ctx.chamber_uniformity_c * abs(sf_tc_rel(ctx)),
-                   "rectangular", source="the gyro's place in the chamber's volume (± half "
-                                         "its uniformity, JJF Table 2) × T_c,SF/a")]
+            type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx) * abs(sf_tc_rel(ctx)),
+                   "rectangular", source=TEMPERATURE_BOUND_SOURCE + " × T_c,SF/a of 5.1.3.4's "
+                                                                    "runs (0 without them)")]
+
+
+#: The source text of the gyro's temperature error at a chamber set point (the budgets' one
+#: line for the chamber's deviation and the gyro's place in the volume).
+TEMPERATURE_BOUND_SOURCE = rg.TEMPERATURE_BOUND_SOURCE
+
+
+def gyro_temperature_bound_c(ctx) -> float:
+    """:func:`gonio.specs._rate_family.formulas.gyro_temperature_bound_c` of the readings'
+    stated chamber deviation bound and uniformity."""
+    return rg.gyro_temperature_bound_c(ctx.chamber_deviation_c, ctx.chamber_uniformity_c)
 
 
 def sf_tc_rel(ctx: Context) -> float:
@@ -232,15 +240,15 @@ def sf_tc_rel(ctx: Context) -> float:
 def scale_factor(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.1 eqs (1), (2): a_BASE, least squares over the 2n + 1 points (rest
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
-    the rate table and the voltmeter (relative), and the chamber's deviation at T_BASE and
-    the gyro's place in its volume (± half the uniformity) times T_c,SF/a (:func:`sf_tc_rel`)."""
+    the rate table and the voltmeter (relative), and the gyro's temperature error at T_BASE
+    (:func:`gyro_temperature_bound_c`: the chamber's deviation and the gyro's place in its
+    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
-    u = gum(lambda a, et, ea, eT, eU: a * (1 + ea) * (1 + eT) * (1 + eU) / (1 + et),
-            _u_rel_sf(ctx, c))
+    u = gum(lambda a, et, ea, eTU: a * (1 + ea) * (1 + eTU) / (1 + et), _u_rel_sf(ctx, c))
     return Item("scale_factor", t, cl, un, c["a"], uncertainty=u,
                 details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"]})
 
@@ -253,8 +261,8 @@ def initial_sf_variation(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     ins = _u_rel_sf(ctx, c)
-    u = gum(lambda a, et, ea, eT, eU: 100 * (a * (1 + ea) * (1 + eT) * (1 + eU) / (1 + et)
-                                             - ctx.a_typ) / ctx.a_typ, ins)
+    u = gum(lambda a, et, ea, eTU: 100 * (a * (1 + ea) * (1 + eTU) / (1 + et)
+                                          - ctx.a_typ) / ctx.a_typ, ins)
     return Item("initial_sf_variation", t, cl, un, 100 * (c["a"] - ctx.a_typ) / ctx.a_typ,
                 uncertainty=u, details={"a_TYP": ctx.a_typ})
 
@@ -579,15 +587,50 @@ def sf_temperature(ctx: Context) -> Item:
     sxx = float(((T - T.mean()) ** 2).sum())
     parts = [c["u_a"] * abs(Ti - T.mean()) / sxx for c, Ti in zip(runs, T)]
     u_slope = math.sqrt(sum(p ** 2 for p in parts))
-    u_T = ctx.chamber_deviation_c / math.sqrt(3) * abs(slope) / math.sqrt(sxx / T.size) / math.sqrt(T.size)
+    u_T_indep = ctx.chamber_deviation_c / math.sqrt(3) * abs(slope) / math.sqrt(sxx)
+    h_T = correlated_deviation_slope_bound(T, slope, ctx.chamber_deviation_c)
     u = gum(lambda s, e, ab: 100 * (s + e) / ab,
             [from_u("T_c", slope, u_slope, dof=_ws(parts, [c["nu_a"] for c in runs]),
                     source="slope from the K_i's noise u(a_i)"),
-             from_u("dT", 0.0, u_T, type="B", source="chamber deviation (independent per point)"),
+             type_b("dT", 0.0, h_T, "rectangular",
+                    source="chamber deviation at the set points, any pattern within ± bound "
+                           "(the deviations may be correlated: the slope's bound "
+                           "δ·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²)"),
              from_u("a_BASE", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"])])
     return Item("sf_temperature_coefficient", t, cl, un, 100 * slope / a[ib], uncertainty=u,
                 details={"T_c_SF": slope, "c": icpt, "temperatures_c": T, "K_i": a,
-                         "S_F_VAR_pct": var})
+                         "S_F_VAR_pct": var,
+                         "u_dT_independent": {
+                             "u": u_T_indep,
+                             "basis": "the set points' deviations independent, each ± bound "
+                                      "rectangular (the budget before; not certified: Table 2 "
+                                      "bounds each deviation, not their correlation)"}})
+
+
+def correlated_deviation_slope_bound(T, slope: float, bound_c: float) -> float:
+    """Bound of the least-squares slope's error (same unit as ``slope``) when the chamber
+    realises each set point T_i at T_i + d_i, |d_i| ≤ ``bound_c`` in ANY pattern (IEC
+    62047-20 5.1.3.4 takes the slope against the set points; JJF 1535 Table 2 bounds each
+    deviation, not their correlation — a chamber sensor with a gain error deviates in
+    proportion to T − T_cal, all the set points in one direction). The fit of a(T_i + d_i)
+    against T_i moves the slope by slope·Σ(T_i − T̄)d_i/Σ(T_i − T̄)², largest at
+    d_i = bound·sign(T_i − T̄):
+
+        h = bound·|slope|·Σ|T_i − T̄| / Σ(T_i − T̄)²
+
+    The budget carries it as one rectangular line of half-width h (u = h/√3). With the set
+    points' deviations independent the slope's u is bound·|slope|/(√3·√Σ(T_i − T̄)²) —
+    h/√3 divided by Σ|T_i − T̄|/√Σ(T_i − T̄)² = 1.90 over five points from −40 to 85 °C,
+    while the pattern at the bound moves the slope by h = 3.3 of that u: the study's worst
+    case (every deviation at its bound, + above T_BASE and − below) covered 0.000 with it.
+
+    >>> round(correlated_deviation_slope_bound([-40, -8.75, 22.5, 53.75, 85], 1.0, 2.0), 6)
+    0.0384
+    """
+    t = np.asarray(T, float)
+    d = t - t.mean()
+    sxx = float((d * d).sum())
+    return float(bound_c) * abs(float(slope)) * float(np.abs(d).sum()) / sxx if sxx > 0 else 0.0
 
 
 def ratiometric(ctx: Context) -> Item:
@@ -680,16 +723,29 @@ def cross_axis(ctx: Context) -> Item:
                 details={"per_axis": per, "axis": ax, **iv})
 
 
+def bias_tc_dps_per_c(ctx: Context) -> float:
+    """The bias temperature coefficient (°/s/°C): the least-squares slope of the 5.3.3.6
+    visits' bias against temperature; 0 when the readings hold no such visits (or the
+    5.3.3.6 item itself refuses them: no coefficient to use)."""
+    try:
+        pts = _bias_temperature_points(ctx) if ctx.has("bias_temperature") else []
+        return float(rg.least_squares_line(np.array([p[0] for p in pts]),
+                                           np.array([p[1] for p in pts]))[0]) \
+            if len({p[0] for p in pts}) >= 2 else 0.0
+    except (GonioError, ValueError, IndexError, KeyError):
+        return 0.0
+
+
 def bias(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.1 eq (24): N_bias = Out,ave − Earth-rate component (°/s), computed in
     output units then divided by a_BASE (reading taken). The Earth component uses the
     physics (axis up Ω_E sin λ, horizontal Ω_E cos λ cos φ); the printed sin/cos are swapped
     (erratum). Mean over the records. Budget: the records' spread (type A), the
-    acquisition's relative gain uncertainty on the whole output, null included, the chamber's
-    deviation at T_BASE (± bound, rectangular) times the bias temperature coefficient of the
-    5.3.3.6 visits, the gyro's place in the chamber's volume (± half its uniformity,
-    rectangular) times the same coefficient (e_U; a_BASE, the initial scale-factor
-    variation and the bias carry it), and the input axis's
+    acquisition's relative gain uncertainty on the whole output, null included, the gyro's
+    temperature error at T_BASE (:func:`gyro_temperature_bound_c`: the chamber's deviation
+    and the gyro's place in its volume, both bounded, bounds added linearly; rectangular)
+    times the bias temperature coefficient of the 5.3.3.6 visits (e_TU; a_BASE, the initial
+    scale-factor variation and the bias carry it), and the input axis's
     alignment on the horizontal Earth rate."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)
@@ -701,27 +757,17 @@ def bias(ctx: Context) -> Item:
         vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
         raw.append(s.mean)
     v = np.array(vals)
-    try:
-        pts = _bias_temperature_points(ctx) if ctx.has("bias_temperature") else []
-        b_tc = rg.least_squares_line(np.array([p[0] for p in pts]),
-                                     np.array([p[1] for p in pts]))[0] \
-            if len({p[0] for p in pts}) >= 2 else 0.0
-    except (GonioError, ValueError, IndexError, KeyError):
-        b_tc = 0.0          # visits the 5.3.3.6 item itself refuses: no coefficient to use
-    u = gum(lambda b, en, eT, eU, eal: b + en + eT + eU + eal,
+    b_tc = bias_tc_dps_per_c(ctx)
+    u = gum(lambda b, en, eTU, eal: b + en + eTU + eal,
             [from_u("N_bias", float(v.mean()),
                     float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
                     dof=max(v.size - 1, 1), source="spread of the records"),
              from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(raw)))
                     / abs(ctx.a_base), type="B",
                     source="acquisition gain on the whole output (null included)"),
-             type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(float(b_tc)), "rectangular",
-                    source="chamber deviation at T_BASE (± bound) × the bias temperature "
-                           "coefficient of 5.3.3.6's visits (0 without them)"),
-             type_b("e_U", 0.0, 0.5 * ctx.chamber_uniformity_c * abs(float(b_tc)),
-                    "rectangular", source="the gyro's place in the chamber's volume (± half "
-                                          "its uniformity, JJF Table 2) × the bias "
-                                          "temperature coefficient"),
+             type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx) * abs(float(b_tc)),
+                    "rectangular", source=TEMPERATURE_BOUND_SOURCE + " × the bias temperature "
+                                          "coefficient of 5.3.3.6's visits (0 without them)"),
              type_b("e_align", 0.0, rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg))
                     * math.sin(math.radians(ctx.axis_alignment_deg)), "rectangular",
                     source="input-axis alignment × horizontal Earth rate")])
@@ -1088,6 +1134,74 @@ def floor_rule_draws(allan, coef, i_floor: int, *, n_draws: int = BIAS_INSTABILI
     return np.sqrt(v.min(axis=1)) / rg.FLICKER_FLOOR_EXACT
 
 
+def fluctuation_band_power(n: int, dt: float, nper: int, amp: float, period_s: float | None,
+                           f_lo: float, f_hi: float, *, include_lo: bool = False) -> float:
+    """The largest power (unit² of ``amp``) that a periodic fluctuation amp·sin(2πt/P + φ)
+    of the record, over every phase φ, adds to the Welch estimate's integral over the band
+    (f_lo, f_hi] (``include_lo``: [f_lo, f_hi]) — the chamber's fluctuation moving the bias
+    through its temperature coefficient during the static record (IEC 62047-20 5.4.5.1 b),
+    c): the rms is taken as the gyro's noise, and the chamber's share cannot be told from it
+    in one record). The Welch estimate of s = cos φ·s₁ + sin φ·s₂ (s₁, s₂ the sine and
+    cosine at φ = 0) over the band is the quadratic form [cos φ, sin φ]·M·[cos φ, sin φ]ᵀ,
+    M from the estimates of s₁, s₂ and s₁ + s₂ through the same estimator
+    (:func:`gonio.analysis.noise.psd.welch_psd`, ``nper`` points, the trapezoid over the
+    band's lines); its maximum over φ is M's largest eigenvalue. Period not stated (None or
+    0): the largest over periods from 4Δt to the record's length (40, log-spaced).
+
+    >>> round(fluctuation_band_power(20000, 0.1, 1000, 1.0, 20.0, 0.0, 5.0) / 0.5, 2)
+    1.0
+    """
+    if amp == 0 or n < 2:
+        return 0.0
+    if not period_s:
+        return max(fluctuation_band_power(n, dt, nper, amp, float(P), f_lo, f_hi,
+                                          include_lo=include_lo)
+                   for P in np.geomspace(4 * dt, n * dt, 40))
+    t = np.arange(n) * dt
+    w = 2 * math.pi * t / period_s
+    s1, s2 = amp * np.sin(w), amp * np.cos(w)
+
+    def band(x):
+        f, p = welch_psd(x, 1.0 / dt, nper)
+        sel = ((f >= f_lo) if include_lo else (f > f_lo)) & (f <= f_hi)
+        return float(np.trapezoid(p[sel], f[sel])) if sel.sum() > 1 else 0.0
+
+    p11, p22, p_sum = band(s1), band(s2), band(s1 + s2)
+    p12 = 0.5 * (p_sum - p11 - p22)
+    return float(max(np.linalg.eigvalsh(np.array([[p11, p12], [p12, p22]]))))
+
+
+def fluctuation_rms_bound(rms: float, added_power: float) -> float:
+    """Half-width of the chamber-fluctuation line on a noise rms (same unit): the reading
+    √(σ² + ΔP) less σ at the largest ΔP the fluctuation adds (:func:`fluctuation_band_power`),
+    σ = √(rms² − ΔP) (the gyro's own); the line is one-sided (the fluctuation only adds) and
+    is carried rectangular ± this half-width, the value kept as read (the reading taken).
+
+    >>> fluctuation_rms_bound(5.0, 9.0)
+    1.0
+    """
+    if added_power <= 0:
+        return 0.0
+    return float(rms - math.sqrt(max(rms * rms - added_power, 0.0)))
+
+
+def _fluctuation_noise_line(ctx: Context, x, dt: float, nper: int, f_lo: float, f_hi: float,
+                            rms: float, *, include_lo: bool = False):
+    """The noise items' chamber-fluctuation line (rectangular, °/s): the bias temperature
+    coefficient of the 5.3.3.6 visits (:func:`bias_tc_dps_per_c`; 0 without them) times the
+    readings' stated fluctuation amplitude, over its stated period (every period where not
+    stated), through the item's own band (:func:`fluctuation_band_power`,
+    :func:`fluctuation_rms_bound`)."""
+    amp = abs(bias_tc_dps_per_c(ctx)) * ctx.chamber_fluctuation_c
+    h = fluctuation_rms_bound(rms, fluctuation_band_power(
+        len(x), dt, nper, amp, ctx.chamber_fluctuation_period_s or None, f_lo, f_hi,
+        include_lo=include_lo))
+    return type_b("fluct", 0.0, h, "rectangular",
+                  source="chamber's fluctuation (± amplitude, period) × the bias temperature "
+                         "coefficient, through the band's Welch estimate (one-sided: it adds "
+                         "power)")
+
+
 def inband_noise(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.1 b), reading taken: the rms output noise below ``band_hz`` (°/s) from
     the Welch one-sided density, and the amplitude density ((°/s)/√Hz) at stated frequencies
@@ -1107,9 +1221,10 @@ def inband_noise(ctx: Context) -> Item:
         else math.nan
     u_rel = u_rel if math.isfinite(u_rel) else 0.0           # no noise in the band
     nu = max(1.0, 0.5 / u_rel ** 2) if u_rel > 0 else 50     # Welch: ν = 2/var_rel(rms²)
-    u = gum(lambda r: r, [from_u("rms", rms, rms * u_rel, dof=nu,
-                                 source="Welch estimate: correlated Hann lines and "
-                                        "overlapping segments")])
+    u = gum(lambda r, e: r + e, [from_u("rms", rms, rms * u_rel, dof=nu,
+                                        source="Welch estimate: correlated Hann lines and "
+                                               "overlapping segments"),
+                                 _fluctuation_noise_line(ctx, x, dt, nper, 0.0, band, rms)])
     return Item("inband_noise", t, cl, un, rms, uncertainty=u,
                 details={"density_dps_per_sqrt_hz": dens, "band_hz": band})
 
@@ -2327,8 +2442,11 @@ def broadband_noise(ctx: Context) -> Item:
     d = ief.broadband_noise_iec(f, p, nz["band_hz"], min(hi, 0.5 / dt))
     nseg = max(1, 2 * x.size // nper - 1)
     u_rel = 1.0 / math.sqrt(nseg * d["lines"])
-    u = gum(lambda r: r, [from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=50,
-                                 source="Welch estimate over the broadband lines")])
+    u = gum(lambda r, e: r + e, [
+        from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=50,
+               source="Welch estimate over the broadband lines"),
+        _fluctuation_noise_line(ctx, x, dt, nper, nz["band_hz"], min(hi, 0.5 / dt),
+                                d["rms_dps"], include_lo=True)])
     return Item("broadband_noise", t, cl, un, d["rms_dps"], uncertainty=u, details={
         **d, "band_low_hz": nz["band_hz"], "band_high_hz": min(hi, 0.5 / dt)})
 

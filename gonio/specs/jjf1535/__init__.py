@@ -72,7 +72,8 @@ def make_context(rd, proto: JJFProtocol):
         rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
         rate_table_ripple_rel=metadata_number(md, "rate_table_ripple_rel", 5.0e-4, rd.path),
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
-        chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path))
+        chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path),
+        chamber_uniformity_c=metadata_number(md, "chamber_uniformity_c", 2.0, rd.path))
 
 
 def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,

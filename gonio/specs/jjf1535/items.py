@@ -431,11 +431,21 @@ def sf_repeatability(ctx: Context) -> Item:
     return Item("sf_repeatability", title, clause, unit, kr, uncertainty=u, details={"Q": Q})
 
 
+def _temperature_bound_c(ctx: Context) -> float:
+    """Half-width (°C) of the gyro's temperature error at a chamber set point, JJF 1535 Table 2
+    (:func:`gonio.specs._rate_family.formulas.gyro_temperature_bound_c`): the readings'
+    ``chamber_deviation_bound_c`` plus half their ``chamber_uniformity_c`` (absent: Table 2's
+    2 °C). The room point of 7.2.5 and 7.2.14 is not in the chamber; its temperature is the
+    room's, read as stated."""
+    return rg.gyro_temperature_bound_c(ctx.chamber_deviation_c, ctx.chamber_uniformity_c)
+
+
 def sf_temperature_sensitivity(ctx: Context) -> Item:
     """JJF 1535 7.2.5 eq (11): K_t = max_i |(K_i − K_rt)/(K_rt (T_i − T_rt))|.
 
-    Uncertainty: the noise of K_i and K_rt (type A) and the chamber's temperature deviation
-    (Table 2, ±2 °C, rectangular) on T_i. K_i's noise is the least-squares slope's noise from
+    Uncertainty: the noise of K_i and K_rt (type A) and the gyro's temperature error at T_i
+    (:func:`_temperature_bound_c`: the chamber's deviation, Table 2 ±2 °C, and the gyro's
+    place in the volume, ± half the uniformity, bounds added; rectangular). K_i's noise is the least-squares slope's noise from
     its rate points' means (``se_K_noise`` of :func:`calibrations`), not the line's residual
     standard error: the residuals hold the gyro's nonlinearity, the same at every
     temperature of the model, which biases K_i and K_rt alike and cancels in their ratio —
@@ -463,8 +473,8 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
                    source=f"K at {Ts[j]:g} °C (noise of its rate points' means)"),
             from_u("K_rt", cals[rt]["fit"].K, u_rt, dof=nu_rt,
                    source=f"K at room temperature {Ts[rt]:g} °C"),
-            type_b("dT", Ts[j] - Ts[rt], ctx.chamber_deviation_c, "rectangular",
-                   source="chamber temperature deviation (Table 2)")])
+            type_b("dT", Ts[j] - Ts[rt], _temperature_bound_c(ctx), "rectangular",
+                   source=rg.TEMPERATURE_BOUND_SOURCE)])
 
     # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
     others = [j for j in range(len(Ts)) if j != rt]
@@ -933,7 +943,8 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
     (F̄_i − F_null)/K_i with K_i from the scale-factor calibration at the same temperature
     (reading taken; K̄ of 7.2.1 when absent). Earth rate and g cancel (same mounting).
 
-    Uncertainty: the record means (block type A), the chamber deviation on T_i (Table 2)."""
+    Uncertainty: the record means (block type A), the gyro's temperature error on T_i
+    (:func:`_temperature_bound_c`, as 7.2.5), the bias drift between the records."""
     title, clause, unit = "bias temperature sensitivity B_t", "7.2.14", "(°/h)/°C"
     miss = _need(ctx, "bias_temperature", "bias_temperature_sensitivity", title, clause, unit)
     if miss:
@@ -959,8 +970,8 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
         return gum(lambda a, b, d, dr: (a - b + dr) / d, [
             from_u("B_i", B[j], U[j][0], dof=U[j][1], source=f"bias at {T[j]:g} °C"),
             from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
-            type_b("dT", T[j] - T[rt], ctx.chamber_deviation_c, "rectangular",
-                   source="chamber temperature deviation (Table 2)"),
+            type_b("dT", T[j] - T[rt], _temperature_bound_c(ctx), "rectangular",
+                   source=rg.TEMPERATURE_BOUND_SOURCE),
             from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=50,
                    source="bias drift between the two records (Allan fit: RRW, BI)")])
 

@@ -26,6 +26,7 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "rate_table_u_rel": repr(eq.rate_table_u_rel),
           "rate_table_ripple_rel": repr(eq.rate_table.ripple_rel),
           "acquisition_u_rel": repr(eq.acquisition_u_rel), "chamber_deviation_bound_c": "2.0",
+          "chamber_uniformity_c": repr(eq.chamber.uniformity_c),
           "table": "rate table, two-axis position table, angular vibration table, chamber "
                    "(virtual)"}
     res = run_rate_session(plan(proto, b), b, seed,
