@@ -2,7 +2,23 @@
 
 #: Budget-source phrases both rate specifications' analyses use, in Chinese (each
 #: specification's certificate data adds these to its own PHRASES_ZH).
+_TB = (r"the gyro's temperature error at the set point: the chamber's deviation \(± bound\) "
+       r"and the gyro's place in its volume \(± half the uniformity, JJF Table 2\), both "
+       r"bounded and allowed at once, their bounds added linearly")
+_TB_ZH = "设定点处陀螺的温度误差：温箱温度偏差（± 界限）与陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2），二者均有界且可同时出现，界限线性相加"
+
 COMMON_PHRASES_ZH = (
+    (_TB, _TB_ZH),
+    (_TB + r" × T_c,SF/a of 5\.1\.3\.4's runs \(0 without them\)",
+     _TB_ZH + " × 5.1.3.4 各次试验的 T_c,SF/a（无该试验时为 0）"),
+    (_TB + r" × the bias temperature coefficient of 5\.3\.3\.6's visits \(0 without them\)",
+     _TB_ZH + " × 5.3.3.6 各次测量的零偏温度系数（无该测量时为 0）"),
+    (r"chamber deviation at the set points, any pattern within ± bound \(the deviations may "
+     r"be correlated: the slope's bound δ·\|T_c\|·Σ\|T_i − T̄\|/Σ\(T_i − T̄\)²\)",
+     "各设定点的温箱温度偏差，± 界限内任意组合（各点偏差可能相关：斜率界限 δ·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²）"),
+    (r"chamber's fluctuation \(± amplitude, period\) × the bias temperature coefficient, "
+     r"through the band's Welch estimate \(one-sided: it adds power\)",
+     "温箱温度波动（± 幅值、周期）× 零偏温度系数，经该频带的 Welch 谱估计（单侧：只增加功率）"),
     (r"sampling of a standard deviation of (\d+) values, s/√\(2ν\) \(GUM E\.4\.3\); U to "
      r"the one-sided χ² 95 % upper limit",
      "{1} 个值的标准偏差的抽样，s/√(2ν)（GUM E.4.3）；U 取至单侧 χ² 95 % 上限"),
