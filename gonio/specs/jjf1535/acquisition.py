@@ -8,7 +8,7 @@ bandwidth where the protocol sets no ``bandwidth.estimated_bandwidth_hz``
 protocol says ``"bench"`` (``--meta null_output=…``, ``--meta latitude_deg=…``, or what
 the gyro output reader states of the gyro), its equipment's uncertainties
 (``rate_table_u_rel``, ``rate_table_ripple_rel``, ``acquisition_u_rel``,
-``chamber_deviation_bound_c``: defaults of
+``chamber_deviation_bound_c``, ``chamber_uniformity_c``: defaults of
 :func:`gonio.specs.jjf1535.make_context` otherwise).
 """
 
