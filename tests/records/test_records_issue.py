@@ -362,7 +362,8 @@ def test_multi_line_amendment_reason_keeps_its_lines(sqlite_store, computed_fold
                             NS).itertext())
     assert said.strip().endswith("customer's address corrected\nserial <RLG-0001> confirmed")
     # an environment taken from the readings is stated so, on the page and in the DCC
-    assert kv_row(page, "Temperature") == "20 °C (taken from the readings&#x27; metadata)"
+    # (the laboratory file written from the records says temperature_c = 20.0: its digits)
+    assert kv_row(page, "Temperature") == "20.0 °C (taken from the readings&#x27; metadata)"
     names = [n.strip() for n in root.xpath(".//dcc:influenceCondition/dcc:name/dcc:content/"
                                            "text()", namespaces=NS)]
     assert names[:2] == ["temperature (taken from the readings' metadata)",
