@@ -214,7 +214,7 @@ LABELS: dict[str, dict[str, str]] = {
                            "any true spreads and record lengths",
                      "zh": "若干标准偏差中的最大者（扣除取最大值的选择偏差，取其界限的中点），由反演各记录"
                            "自身 χ² 检验所得最大真标准偏差的 95 % 区间给出：上端为各记录自身 χ² 上限中的"
-                           "最大者，下端为各记录按 Šidák 水平的下限中的最大者，对任何真标准偏差与记录长度"
+                           "最大者，下端为各记录按多重比较（西达克）校正水平的下限中的最大者，对任何真标准偏差与记录长度"
                            "均成立"},
     "k_iv_bound": {"en": "a quantity the rate table's errors enter by its bound-condition interval "
                          "value ± (a + k·u): the table's errors at their bounds in their worst "
