@@ -111,18 +111,26 @@ def test_tilt_beyond_stated_bound_is_a_finding(sim, tmp_path):
     low = edited(sim, tmp_path / "low", header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.02\n"))
     near = edited(sim, tmp_path / "near",
                   header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.04\n"))
+    far = edited(sim, tmp_path / "far", header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.2\n"))
     r_low, r_near = calibrate(low, tmp_path / "ol"), calibrate(near, tmp_path / "on")
+    r_far = calibrate(far, tmp_path / "of")
     beyond = [f for f in r_low["findings"] if f["code"] == "tilt-beyond-bound"]
     assert len(beyond) == 1 and beyond[0]["action"] == "flagged" and beyond[0]["clause"] == "A.1"
     assert "0.02°" in beyond[0]["message"]
-    # 0.04° lies inside ψ's interval: the bound is not contradicted
+    # 0.04° lies inside ψ's interval: the bound is not contradicted (no finding), but it no
+    # longer bounds what was measured: its lines are taken at ψ + U95 as well, and noted
     assert not [f for f in r_near["findings"] if f["code"] == "tilt-beyond-bound"]
-    # the bound's line is taken at ψ + U95 (the coupling is proportional to sin of the tilt)
     tm = tilt_measured(r_low)
     top = tm["tilt_deg"] + tm["U95_tilt_deg"]
     assert tm["tilt_deg"] - tm["U95_tilt_deg"] > 0.02
-    ratio = bound_line_u(r_low) / bound_line_u(r_near)
-    assert ratio == pytest.approx(math.sin(math.radians(top)) / math.sin(math.radians(0.04)),
+    assert tm["tilt_deg"] - tm["U95_tilt_deg"] <= 0.04 < top
+    assert bound_line_u(r_near) == pytest.approx(bound_line_u(r_low), rel=1e-9)
+    assert f"upper 95 % limit psi + U95 = {top:.3g} deg" in json.dumps(r_near)
+    # 0.2° bounds the whole interval: the line stays at the stated bound (the coupling is
+    # proportional to the sine of the tilt), nothing noted
+    assert top < 0.2 and "psi + U95 =" not in json.dumps(r_far)
+    ratio = bound_line_u(r_low) / bound_line_u(r_far)
+    assert ratio == pytest.approx(math.sin(math.radians(top)) / math.sin(math.radians(0.2)),
                                   rel=1e-3)
     html = (tmp_path / "ol" / "certificate.html").read_text()
     assert "beyond the stated tilt bound 0.02°" in html

@@ -1354,8 +1354,12 @@ def tilt_beyond_bound(results, readings, protocol, settings: dict) -> tuple[dict
       tilt's upper 95 % limit, in place of the stated bound (``settings`` returned with
       ``tilt_bound_deg`` widened); the measurand's text keeps the stated bound.
 
-    An interval that reaches the bound (ψ − U95 ≤ bound) agrees with it: nothing changes.
-    No estimate (no ``[tilt_estimate]``, no rows, K not measured): nothing changes.
+    An interval that straddles the bound (ψ − U95 ≤ bound < ψ + U95) does not contradict it,
+    but the bound no longer bounds what was measured (ψ = 0.16° ± 0.06° against 0.1°: a line
+    at 0.1° would hold the coupling with well under 95 %): no finding, and the lines taken at
+    the bound are taken at ψ + U95 all the same (the calibration notes it). An interval wholly
+    within the bound (ψ + U95 ≤ bound) changes nothing. No estimate (no
+    ``[tilt_estimate]``, no rows, K not measured): nothing changes.
 
     >>> from types import SimpleNamespace as N
     >>> tc = N(tilt_deg=0.17, u_tilt_deg=0.1, k95=2.0)
@@ -1364,9 +1368,13 @@ def tilt_beyond_bound(results, readings, protocol, settings: dict) -> tuple[dict
     """
     tc, _ = tilt_correction(results, readings, protocol)
     bound = float(settings["tilt_bound_deg"])
-    if tc is None or not beyond_bound(tc, bound):
+    if tc is None:
         return settings, []
     psi, big_u = float(tc.tilt_deg), float(tc.k95) * float(tc.u_tilt_deg)
+    if psi + big_u <= bound:
+        return settings, []
+    if not beyond_bound(tc, bound):         # the bound may hold, and may not: the lines at
+        return {**settings, "tilt_bound_deg": psi + big_u}, []   # the tilt's upper limit
     rows = readings.data[readings.data["test"] == "tilt_estimate"]
     line = int(rows["line"].min()) if len(rows) else None
     msg = (f"the in-situ tilt estimate measured psi = {psi:.3g}° (U95 {big_u:.2g}°, interval "
@@ -2548,9 +2556,16 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                   **programme_conditions(proto))
     _note_exclusions(res, excluded)
     check_counts_agree(kept, res)
+    bound_note = ""
     if tilt is None:            # a tilt file given (--tilt) states the bound itself
+        stated_bound = settings["tilt_bound_deg"]
         settings, beyond = tilt_beyond_bound(res, kept, proto, settings)
         findings = list(findings) + beyond
+        if not beyond and settings["tilt_bound_deg"] != stated_bound:
+            bound_note = (f"the lines taken at the tilt bound are taken at the measured tilt's "
+                          f"upper 95 % limit psi + U95 = {settings['tilt_bound_deg']:.3g} deg, "
+                          f"above the stated bound {float(stated_bound):g} deg (A.1) "
+                          "[beyond the draft]")
     e_tilt = None       # E corrected at the measured tilt: the physical reading only
     if budget == "physical" and tilt is None:
         res, e_tilt = angle_deviation_at_measured_tilt(res, kept, proto)
@@ -2560,6 +2575,8 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed,
                                             tilt_measured=e_tilt, table_measured=e_table)
+    if bound_note:
+        notes.append(bound_note)
     if e_table is not None:
         notes.append("; ".join(x for x in (
             f"E corrected by the {table_calibration.describe()} [beyond the draft]"
