@@ -461,8 +461,8 @@ def attach_line(store, cal) -> str:
     with store.session() as s:
         missing = services.missing_for_review(s, cal)
         names = services.standard_names(s, cal.id)
-    env = ("not entered" if cal.temperature_c is None else
-           f"{cal.temperature_c:g} °C, {cal.humidity_pct:g} %"
+    temp, hum = services.environment_shown(cal)     # as entered, as the certificate
+    env = ("not entered" if temp is None else f"{temp.text} °C, {hum.text} %"
            + {"readings": " (from the readings)", "lab file": " (from the laboratory file)"}
            .get(cal.environment_from, ""))
     return (f"calibration {cal.id}: standards {', '.join(names) or 'none'}; environment "

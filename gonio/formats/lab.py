@@ -335,6 +335,8 @@ def _keep_condition_digits(env: dict, path) -> None:
         return                                # already read once: keep the numbers as read
     for key in ("temperature_c", "humidity_pct"):
         text = raw.get(key)
+        if isinstance(text, int) and not isinstance(text, bool):
+            text = str(text)          # an integer ("20"): its digits, no decimal
         if env.get(key) is not None and isinstance(text, str):
             text = text.replace("_", "")
             if float(text) == env[key]:

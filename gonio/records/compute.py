@@ -50,10 +50,26 @@ def readings_file(src: str | Path):
 def _toml_value(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
+    if isinstance(v, float) and _toml_number_text(v):
+        return v.text            # a number written with its digits (WrittenNumber)
     if isinstance(v, (int, float)):
         return repr(float(v)) if isinstance(v, float) else str(v)
     # a JSON string is a valid TOML basic string (\uXXXX escapes for control characters)
     return json.dumps(str(v), ensure_ascii=False)
+
+
+def _toml_number_text(v: float) -> bool:
+    """Whether ``v`` carries a text (:class:`gonio.formats.lab.WrittenNumber`) that TOML reads
+    as the number ``v`` ("20" and "20.0" both 20: the file keeps the digits written)."""
+    import tomllib
+
+    text = getattr(v, "text", None)
+    if not isinstance(text, str) or not text or "\n" in text:
+        return False
+    try:
+        return float(tomllib.loads(f"x = {text}")["x"]) == float(v)
+    except (tomllib.TOMLDecodeError, TypeError, ValueError):
+        return False
 
 
 def lab_toml(lab: dict) -> str:

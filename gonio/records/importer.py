@@ -250,13 +250,17 @@ def lab_standard_ids(s, standards: list, day: _dt.date, lab) -> list[int]:
 
 def lab_environment(details: dict) -> dict:
     """The environment a laboratory file's ``[environment]`` gives, as a calibration's
-    columns: ``{"temperature_c", "humidity_pct", "environment_from"}`` with the source
-    stated (``"lab file"``; ``"readings"`` where the file says ``source = "readings"``), or
+    columns: the numbers with the digits the file writes them with
+    (:func:`services.environment_columns`) and the source stated (``environment_from``:
+    ``"lab file"``; ``"readings"`` where the file says ``source = "readings"``), or
     {} when it gives not both values (review needs both: nothing half is recorded).
 
-    >>> lab_environment({"environment": {"temperature_c": 20.5, "humidity_pct": 41.0,
-    ...                                  "source": "entered"}})
-    {'temperature_c': 20.5, 'humidity_pct': 41.0, 'environment_from': 'lab file'}
+    >>> from gonio.formats.lab import WrittenNumber
+    >>> lab_environment({"environment": {"temperature_c": WrittenNumber(20.0, "20.0"),
+    ...                                  "humidity_pct": 41.0, "source": "entered"}})
+    ... # doctest: +NORMALIZE_WHITESPACE
+    {'temperature_c': 20.0, 'humidity_pct': 41.0, 'temperature_text': '20.0',
+     'humidity_text': '41', 'environment_from': 'lab file'}
     >>> lab_environment({"environment": {"temperature_c": 20.5}}), lab_environment({})
     ({}, {})
     """
@@ -264,7 +268,7 @@ def lab_environment(details: dict) -> dict:
     temp, hum = env.get("temperature_c"), env.get("humidity_pct")
     if temp is None or hum is None:
         return {}
-    return {"temperature_c": float(temp), "humidity_pct": float(hum),
+    return {**services.environment_columns(temp, hum),
             "environment_from": "readings" if env.get("source") == "readings" else "lab file"}
 
 

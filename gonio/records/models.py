@@ -214,6 +214,11 @@ class Calibration(Base):
     lab_name: Mapped[str] = mapped_column(String(255), default="")
     temperature_c: Mapped[float | None] = mapped_column(Float, nullable=True)
     humidity_pct: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: the temperature and humidity as entered ("20" or "20.0": their digits state the
+    #: reading's resolution), which the page, the laboratory file written for the
+    #: calibration, its certificate and DCC print (migration 0012; None: no environment)
+    temperature_text: Mapped[str | None] = mapped_column(String(40), nullable=True)
+    humidity_text: Mapped[str | None] = mapped_column(String(40), nullable=True)
     #: where the environment came from: "" entered by a person, "readings" taken from the
     #: readings file's metadata (and stated so on the page and the certificate), "lab file"
     #: the laboratory file's [environment] it was computed with

@@ -163,6 +163,73 @@ def number_value(value, name: str, lo: float, hi: float) -> float | None:
     return x
 
 
+def condition_digits(value) -> str:
+    """The text an environment condition (temperature, humidity) is recorded and printed
+    with: its digits as entered, the resolution they state kept ("20" stays "20", "20.0"
+    stays "20.0"; a laboratory file's number as written there, its
+    :class:`~gonio.formats.lab.WrittenNumber` text), written as a plain decimal that TOML
+    reads as the same number (leading zeros and underscores dropped, "20." is "20", ".5" is
+    "0.5"). A text in exponent form or with a sign "+" is stated plainly, as
+    :func:`gonio.report.header.condition_text` states it; a number given as a float (no
+    text: the Python API) to 6 significant digits where that is the number, else in full.
+
+    >>> [condition_digits(v) for v in ("20", "20.0", " 020.50 ", "20.", ".5", "2e1", "+21.5")]
+    ['20', '20.0', '20.50', '20', '0.5', '20', '21.5']
+    >>> condition_digits(20), condition_digits(20.0), condition_digits(20.1234567)
+    ('20', '20', '20.1234567')
+    """
+    import decimal
+
+    text = getattr(value, "text", None)
+    if isinstance(text, str):
+        value = text
+    if isinstance(value, str):
+        t = value.strip().replace("_", "")
+        if re.fullmatch(r"-?(\d+\.?\d*|\.\d+)", t):
+            return format(decimal.Decimal(t), "f")
+        value = float(t)
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    x = float(value)
+    short = f"{x:g}"
+    return short if float(short) == x else repr(x)
+
+
+def condition_value(value, name: str, lo: float, hi: float):
+    """:func:`number_value` of an environment condition, as a
+    :class:`~gonio.formats.lab.WrittenNumber` whose text is :func:`condition_digits`
+    (None when empty)."""
+    from gonio.formats.lab import WrittenNumber
+
+    x = number_value(value, name, lo, hi)
+    return None if x is None else WrittenNumber(x, condition_digits(value))
+
+
+def environment_columns(temperature, humidity) -> dict:
+    """A calibration's environment columns for ``temperature`` and ``humidity`` (numbers,
+    texts or :class:`~gonio.formats.lab.WrittenNumber`; None: not given): each number with
+    the text it was entered with (:func:`condition_digits`)."""
+    def num(v):
+        return None if v is None else float(v)
+
+    def txt(v):
+        return None if v is None else condition_digits(v)
+    return {"temperature_c": num(temperature), "humidity_pct": num(humidity),
+            "temperature_text": txt(temperature), "humidity_text": txt(humidity)}
+
+
+def environment_shown(cal) -> tuple:
+    """(temperature, humidity) of calibration ``cal`` as recorded, each a
+    :class:`~gonio.formats.lab.WrittenNumber` with the text it was entered with (a row
+    without the text: the number to 6 significant digits, as it was printed), or None."""
+    from gonio.formats.lab import WrittenNumber
+
+    def one(x, t):
+        return None if x is None else WrittenNumber(x, t or condition_digits(float(x)))
+    return (one(cal.temperature_c, cal.temperature_text),
+            one(cal.humidity_pct, cal.humidity_text))
+
+
 def require(actor: User | None, role: str) -> User:
     """``actor`` holds ``role`` (and is active), else a GonioError."""
     if actor is None or not actor.active or not actor.has(role):
@@ -677,8 +744,8 @@ def submission_fields(performed_on, received_on, standard_ids, temperature_c, hu
     if not ids:
         raise GonioError("tick the reference standard(s) used: a calibration names at least "
                          "one registered standard (its traceability)", key="standards")
-    temp = number_value(temperature_c, "temperature_c", -50, 100)
-    hum = number_value(humidity_pct, "humidity_pct", 0, 100)
+    temp = condition_value(temperature_c, "temperature_c", -50, 100)
+    hum = condition_value(humidity_pct, "humidity_pct", 0, 100)
     for value, what in ((temp, "room temperature (°C)"), (hum, "relative humidity (%)")):
         if value is None:
             raise GonioError(f"enter the {what} of the calibration", key="environment")
@@ -1607,7 +1674,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           lab_sha256=lab_sha256,
                           lab_name=text(lab_name, "laboratory file name", max_len=255)
                           if lab_sha256 else "",
-                          temperature_c=temp, humidity_pct=hum, environment_from="",
+                          **environment_columns(temp, hum), environment_from="",
                           place=text(place, "place"), location=location_value(location),
                           performed_on=day,
                           received_on=received, status="queued", progress="waiting for a worker",
@@ -1747,8 +1814,8 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
     if environment_from_readings and entered:
         raise GonioError("enter the environment or take it from the readings, not both",
                          key="environment")
-    temp = number_value(temperature_c, "temperature_c", -50, 100)
-    hum = number_value(humidity_pct, "humidity_pct", 0, 100)
+    temp = condition_value(temperature_c, "temperature_c", -50, 100)
+    hum = condition_value(humidity_pct, "humidity_pct", 0, 100)
     if entered and (temp is None or hum is None):
         raise GonioError("enter both the room temperature (°C) and the relative humidity "
                          "(%)", key="environment")
@@ -1770,7 +1837,9 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
         if standard_ids is not None:
             use_standards(s, cal, standard_ids)
         if env is not None:
-            cal.temperature_c, cal.humidity_pct, cal.environment_from = env
+            for key, value in environment_columns(env[0], env[1]).items():
+                setattr(cal, key, value)
+            cal.environment_from = env[2]
         if cal.status == "reviewed":     # what was reviewed changed: reviewed again
             cal.status, cal.reviewed_by_id, cal.reviewed_at = "computed", None, None
             cal.reviewed_seal, cal.review_comment = "", ""
@@ -1842,7 +1911,7 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
         if v is None:
             raise GonioError(f"the readings state no {what} (# {keys[0]}): enter the "
                              "environment", key="environment")
-        got.append(number_value(str(v), f"readings' # {keys[0]}", lo, hi))
+        got.append(condition_value(str(v), f"readings' # {keys[0]}", lo, hi))
     return got[0], got[1], "readings"
 
 
@@ -2379,8 +2448,9 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             "standards": [{"name": st.name, "identifier": st.identifier,
                            "accuracy": st.accuracy, "certificate": st.certificate,
                            "traceability": st.traceability} for st in stds],
-            "environment": {"temperature_c": cal.temperature_c,
-                            "humidity_pct": cal.humidity_pct,
+            # the numbers with the digits they were entered with (the file writes them)
+            "environment": {"temperature_c": environment_shown(cal)[0],
+                            "humidity_pct": environment_shown(cal)[1],
                             # one from the laboratory file was entered there
                             "source": "readings" if cal.environment_from == "readings"
                             else "entered"},

@@ -224,8 +224,10 @@ def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_re
                                                                            "readings")
     lab = services.lab_details(sqlite_store, cal.id, final=False)
     assert lab["environment"]["source"] == "readings"
+    # the readings' "# temperature_c: 20.0" with its digits, as the certificate of gonio
+    # calibrate on these readings states it
     assert _environment_rows({}, lab, labels("en")) == [
-        ("Temperature", "20 °C (taken from the readings' metadata)"),
+        ("Temperature", "20.0 °C (taken from the readings' metadata)"),
         ("Relative humidity", "44 % (taken from the readings' metadata)")]
     assert _environment_rows({}, lab, labels("zh"))[1] == ("相对湿度", "44 %（取自读数文件的元数据）")
     from gonio.report.rate_dcc import _conditions
@@ -362,9 +364,12 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
     capsys.readouterr()
     assert main(run + ["--out", str(tmp_path / "a"), "--record"]) == 0
     err = capsys.readouterr().err
-    # the laboratory file's [[standards]] RT-07 is the registered RT-07 (before: none)
+    # the laboratory file's [[standards]] RT-07 is the registered RT-07 (before: none);
+    # its humidity_pct = 45.0 keeps the digits written there, as the command line's
+    # certificate states it (the draft below too)
     assert err.endswith("gonio: recorded as calibration 1: standards RT-07; environment "
-                        "20.1 °C, 45 % (from the laboratory file)\n"), err
+                        "20.1 °C, 45.0 % (from the laboratory file)\n"), err
+    assert "<td>45.0 %</td>" in (tmp_path / "a" / "certificate.html").read_text("utf-8")
     run[1] = str(bench_readings[1])         # another run: one readings file, one calibration
     assert main(run + ["--out", str(tmp_path / "b"), "--record", "--standard", "RT-07",
                        "--temperature", "20", "--humidity", "44"]) == 0
@@ -398,6 +403,7 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
         assert queries.calibrations(st)[1] == 2                # the refused one: not recorded
         assert one.status == "computed"   # rendered at once with the lab file's standard
         assert '<span class="nb">RT-07</span>' in draft_html(st, 1)
+        assert "<td>20.1 °C</td>" in draft_html(st, 1) and "<td>45.0 %</td>" in draft_html(st, 1)
     finally:
         st.close()
 
@@ -463,7 +469,7 @@ def test_db_import_matches_the_lab_files_standards(tmp_path, computed_folder, be
         st.close()
     assert main(argv + ["--lab", str(good), "--standard", "LV-3"]) == 0
     assert capsys.readouterr().out.endswith(
-        "calibration 1: standards LV-3, RT-07; environment 20.1 °C, 45 % (from the "
+        "calibration 1: standards LV-3, RT-07; environment 20.1 °C, 45.0 % (from the "
         "laboratory file)\n")
     st = open_store(None, data)
     try:
