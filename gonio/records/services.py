@@ -202,7 +202,17 @@ def condition_value(value, name: str, lo: float, hi: float):
     from gonio.formats.lab import WrittenNumber
 
     x = number_value(value, name, lo, hi)
-    return None if x is None else WrittenNumber(x, condition_digits(value))
+    if x is None:
+        return None
+    digits = condition_digits(value)
+    if len(digits) > CONDITION_TEXT_CHARS:       # the column's width (".5" gains a "0")
+        raise GonioError(f"more than {CONDITION_TEXT_CHARS} characters as a plain decimal",
+                         key=name)
+    return WrittenNumber(x, digits)
+
+
+#: the width of ``calibrations.temperature_text`` and ``humidity_text`` (migration 0012)
+CONDITION_TEXT_CHARS = 40
 
 
 def environment_columns(temperature, humidity) -> dict:

@@ -190,3 +190,19 @@ def test_migration_0012_over_0011(tmp_path, pg_server):
             assert services.calibration(st, 2).temperature_text == "20.25"
         finally:
             st.close()
+
+
+def test_condition_digits_are_the_same_number_in_toml():
+    """Every text the records keep is a TOML number equal to what was entered, with as many
+    decimals as were typed (a plain decimal); one wider than the column is refused in a line."""
+    from gonio.errors import GonioError
+
+    for typed in ("20", "20.0", "-3.25", "007.5", "20.", ".5", "-.5", "1_9.5", "2e1", "+21.5",
+                  "2.05E1", "-0.0", "99.999999999999999"):
+        got = services.condition_digits(typed)
+        assert tomllib.loads(f"x = {got}")["x"] == float(typed.replace("_", "")), typed
+        if re.fullmatch(r"[-\d_]*\.?\d*", typed):
+            decimals = typed.split(".")[1] if "." in typed else ""
+            assert (got.split(".")[1] if "." in got else "") == decimals, typed
+    with pytest.raises(GonioError, match="temperature_c: more than 40 characters"):
+        services.condition_value("-." + "0" * 38, "temperature_c", -50, 100)
