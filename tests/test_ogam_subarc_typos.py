@@ -272,3 +272,30 @@ def test_a_5_arcsec_typo_in_a_small_programme_is_caught(small_rlg, seed):
         found = [f for f in screen(Readings(d2, md, None), p) if f.action != "flagged"]
         assert [(f.line, f.test) for f in found] == [(int(df.at[i, "line"]), test)], \
             [f.message for f in found]
+
+
+@pytest.mark.parametrize("plants", [((1, 2.0), (2, -2.0)), ((1, 2.0), (2, -1.9), (3, 2.2))])
+def test_several_7_1_typos_refuse_naming_their_lines(session, tmp_path, capsys, plants):
+    """One 7.1 reading that departs from 7.4's repetitions is set aside; two or three are
+    not: the rule judges them one at a time, and once two were gone the third (60° +2″)
+    was kept unjudged, and K_l 0.00091 [0.00074, 0.00108] % and E 2.92 [2.10, 3.58]″ were
+    certified from it (clean: ≤ 0.00022 %, ≤ 0.66″). The calibration is refused in one line
+    naming the lines set aside, and nothing is written."""
+    lines = session.read_text().splitlines(keepends=True)
+    k = nominal_k(lines)
+    for rnd, arcsec in plants:
+        i = next(n for n, ln in enumerate(lines)
+                 if ln.split(",")[:3] == ["scale_factor", "1", str(rnd)])
+        p = lines[i].rstrip("\n").split(",")
+        p[7] = str(int(p[7]) + round(arcsec / ARCSEC_PER_DEG * k))
+        lines[i] = ",".join(p) + "\n"
+    f = tmp_path / "in" / "readings.csv"
+    f.parent.mkdir()
+    f.write_text("".join(lines))
+    capsys.readouterr()
+    assert main(["calibrate", str(f), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert "depart from the repeated readings of the same stops" in err, err
+    assert "the calibration is refused" in err and "readings.csv:" in err, err
+    assert not (tmp_path / "o").exists()

@@ -513,7 +513,9 @@ def line_departures(x_deg, d_arcsec, floor_arcsec: float, scale_min_arcsec: floa
     drift = np.zeros(d.size) if drift_arcsec is None else np.asarray(drift_arcsec, float)
     idx = np.arange(d.size)
     out = []
-    while idx.size >= LINE_MIN:
+    # with the prior, the scale needs no refit: the others are judged again down to a line
+    # with one degree of freedom of its own (a set-aside never leaves readings unjudged)
+    while idx.size >= (LINE_MIN if prior is None else 4):
         X = _design(x, idx.size - 1 >= HARMONIC_MIN)
         best = None
         for j in range(idx.size):
@@ -1121,8 +1123,30 @@ def screen(readings: Readings, protocol) -> list[Finding]:
 #: on how many (certificate, results.json). A reading set aside by any other rule (no
 #: repeated reference: the position is known from nothing else), and every round of 7.4
 #: (E is the largest |E_i|: a point lost could be the largest), 7.6 and 7.7 (compared over
-#: the same positions), refuse instead.
+#: the same positions), refuse instead. At most :data:`ROUND_MAY_GO_MAX` such readings go.
 ROUND_MAY_GO: tuple[str, ...] = ("scale_factor",)
+#: The most readings of a ``ROUND_MAY_GO`` test the repeated-reference rule may set aside
+#: before the calibration is refused: the rule judges the departing readings one at a time
+#: while at least ``LINE_MIN`` remain, so with several departing the last ones are never
+#: judged (three bad 7.1 readings: two set aside, the third kept, K_l and E certified from it
+#: with tight intervals); and each reading gone leaves K_l a range over fewer positions. One
+#: typo is set aside; more refuse, naming their lines.
+ROUND_MAY_GO_MAX: int = 1
+
+
+def _refuse_several_gone(df: pd.DataFrame, aside: dict, path) -> None:
+    """Refuse a calibration where the repeated-reference rule sets aside more than
+    :data:`ROUND_MAY_GO_MAX` readings of one ``ROUND_MAY_GO`` test (one line naming them)."""
+    for test in ROUND_MAY_GO:
+        lines = sorted(int(ln) for ln, f in aside.items() if f.rule == _REFERENCE_LINE_RULE
+                       and (df.loc[df["line"] == ln, "test"] == test).any())
+        if len(lines) > ROUND_MAY_GO_MAX:
+            raise GonioError(
+                f"{CLAUSES.get(test, test)} readings at lines {', '.join(map(str, lines))} "
+                f"depart from the repeated readings of the same stops: one such reading is set "
+                f"aside, {len(lines)} leave the others unjudged and the item on fewer "
+                f"positions; the calibration is refused (check these readings)",
+                file=path, line=lines[0], column=aside[lines[0]].column)
 
 
 def apply_findings(readings: Readings, findings: list[Finding], protocol=None
@@ -1164,6 +1188,7 @@ def apply_findings(readings: Readings, findings: list[Finding], protocol=None
                              f"reading of its round is left: the item cannot stand without "
                              f"it; {f.message}", file=readings.path, line=line,
                              column=f.column)
+    _refuse_several_gone(df, aside, readings.path)
     ex = df.loc[mask, cols].copy()
     ex["reason"] = [f"{aside[int(x)].message} [{aside[int(x)].code}]" for x in ex["line"]]
     kept = Readings(left.reset_index(drop=True), dict(readings.metadata), readings.path)
