@@ -26,6 +26,7 @@ from scipy.special import gammaincc
 
 from gonio.analysis.conformity import decide_items
 from gonio.errors import GonioError
+from gonio.result.statement import given_text
 from gonio.formats.lab import naming_lab_file
 from gonio.result.model import Item, Result, Uncertainty
 from gonio.result.statement import K_SOURCE_MAX_ABS
@@ -313,8 +314,11 @@ def test_optical_certificate_states_no_negative_acceptance_limit(optical, tmp_pa
 
     _, result = optical
     items = result.items
-    lims = {"scale_factor_nonlinearity": 1.0e-4, "rate_consistency": 0.5,
-            "zero_stability": 0.02, "repeatability": 0.4}
+    # each limit below its item's U (two significant digits of 0.9 U): the old acceptance
+    # T_U − U lay below zero
+    lims = {k: float(f"{0.9 * items[k].uncertainty.U:.2g}")
+            for k in ("scale_factor_nonlinearity", "rate_consistency", "zero_stability",
+                      "repeatability")}
     for key, T in lims.items():        # the old acceptance T_U − U lay below zero
         assert T - items[key].uncertainty.U < 0
     lab = _lab([{"item": k, "upper": T} for k, T in lims.items()]
@@ -338,7 +342,7 @@ def test_optical_certificate_states_no_negative_acceptance_limit(optical, tmp_pa
     assert "no probability is stated for" in html
     summary = (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")
     assert "acceptance ≤ -" not in summary and "acceptance ≤ −" not in summary
-    assert "interval's upper end ≤ 0.0001" in summary
+    assert "interval's upper end ≤ " + given_text(lims["scale_factor_nonlinearity"]) in summary
 
 
 def test_optical_asymmetric_e_limit_is_refused(optical):

@@ -125,9 +125,14 @@ def test_items_csv_holds_the_results_json_numbers(issued):
             assert float(row["value"]) == pytest.approx(it["value"], rel=1e-12), key
         else:                 # a bias-corrected range below zero: its bound alone is stated
             assert it["value"] < 0, key
-        if u["k"] is None:
+        # a non-negative quantity with k whose value − U falls below zero is stated by its
+        # interval [0, value + U] (the certificate's "≤ value + U"): no U or k beside it
+        bound = u["k"] is not None and row["U"] == ""
+        if bound:
+            assert it["value"] - u["U"] < 0, key
+        if u["k"] is None or bound:
             assert row["U"] == "" and row["k"] == "", key
-            lo, hi = u["interval"]
+            lo, hi = u["interval"] if u.get("interval") else (0.0, it["value"] + u["U"])
             assert (float(row["interval_low"]), float(row["interval_high"])) == \
                 pytest.approx((lo, hi), rel=1e-12), key
         else:
@@ -194,6 +199,13 @@ def test_dcc_states_the_numbers_of_results_json(issued):
             assert float(hi) >= u["interval"][1] * (1 - 1e-12) and \
                 float(hi) - u["interval"][1] <= _ulp(hi) * (1 + 1e-9), key
             assert real.find(".//si:expandedMU", NS) is None, key
+        elif it["value"] - u["U"] < 0 and real.find(".//si:expandedMU", NS) is None:
+            # a non-negative quantity stated by [0, value + U]: its interval, no U
+            ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+            assert ci is not None, key
+            hi = ci.find("si:intervalMax", NS).text
+            assert float(hi) >= (it["value"] + u["U"]) * (1 - 1e-12), key
+            assert float(hi) - (it["value"] + u["U"]) <= _ulp(hi) * (1 + 1e-9), key
         else:
             ex = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
             assert ex is not None, key

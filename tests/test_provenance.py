@@ -399,8 +399,8 @@ def test_the_flag_follows_what_is_contradicted(tmp_path):
     en = labels("en")
     text = " ".join(pdf_pages(out / "certificate.pdf")[0:2])
     text = " ".join(text.split())
-    assert f"{t + 5:g} °C {en['identity_flag']}" in text, text       # the temperature's line
+    assert f"{t + 5!r} °C {en['identity_flag']}" in text, text       # the temperature's line
     assert text.count(en["identity_flag"]) == 1
     summary = (out / "summary.txt").read_text(encoding="utf-8")
-    assert f"temperature: {t + 5:g} °C [CONTRADICTED" in summary
+    assert f"temperature: {t + 5!r} °C [CONTRADICTED" in summary
     assert "serial: " + md["serial"] + " [" not in summary

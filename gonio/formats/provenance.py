@@ -172,7 +172,7 @@ def watermark_chance(p) -> str:
     """The watermark test's tail probability as the notice prints it ("< 10⁻³⁰⁰" below
     that).
 
-    >>> watermark_chance(7.45e-9), watermark_chance(0.0), watermark_chance(None)
+    >>> watermark_chance(7.46e-9), watermark_chance(0.0), watermark_chance(None)
     ('7.5×10⁻⁹', '< 10⁻³⁰⁰', '?')
     """
     if p is None:

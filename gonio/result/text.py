@@ -137,7 +137,8 @@ def identity_lines(findings, metadata: dict, lab: dict | None) -> list[str]:
             v = next((metadata.get(k) for k in md_keys if metadata.get(k) not in (None, "")),
                      None)
         text = "not stated" if v in (None, "") else (
-            f"{v:g}" if isinstance(v, float) else str(v).strip()) + unit
+            (getattr(v, "text", None) or f"{v:g}") if isinstance(v, float)
+            else str(v).strip()) + unit     # a laboratory file's number as written ("25.0")
         out.append(f"{subject}: {text} [CONTRADICTED by the readings: see the flagged finding "
                    f"'{subject}: ...' below]")
     return out
