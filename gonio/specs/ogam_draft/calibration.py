@@ -1388,6 +1388,19 @@ def tilt_beyond_bound(results, readings, protocol, settings: dict) -> tuple[dict
                      rule="psi - U95(psi) > tilt_bound_deg: flagged, bound lines at psi + U95")])
 
 
+def _tilt_bound_settings(res, kept, proto, settings: dict, findings) -> tuple[dict, list, str]:
+    """:func:`tilt_beyond_bound` for :func:`analyse`: (settings, findings with its finding,
+    the calibration note where the bound lines are widened without a finding, else "")."""
+    stated_bound = settings["tilt_bound_deg"]
+    settings, beyond = tilt_beyond_bound(res, kept, proto, settings)
+    note = ""
+    if not beyond and settings["tilt_bound_deg"] != stated_bound:
+        note = (f"the lines taken at the tilt bound are taken at the measured tilt's upper "
+                f"95 % limit psi + U95 = {settings['tilt_bound_deg']:.3g} deg, above the "
+                f"stated bound {float(stated_bound):g} deg (A.1) [beyond the draft]")
+    return settings, list(findings) + beyond, note
+
+
 def beyond_bound(tc, bound_deg: float) -> bool:
     """Whether a measured tilt's 95 % interval lies wholly beyond ``bound_deg``:
     ψ − k95 · u(ψ) > bound (:func:`tilt_beyond_bound`)."""
@@ -2558,14 +2571,8 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     check_counts_agree(kept, res)
     bound_note = ""
     if tilt is None:            # a tilt file given (--tilt) states the bound itself
-        stated_bound = settings["tilt_bound_deg"]
-        settings, beyond = tilt_beyond_bound(res, kept, proto, settings)
-        findings = list(findings) + beyond
-        if not beyond and settings["tilt_bound_deg"] != stated_bound:
-            bound_note = (f"the lines taken at the tilt bound are taken at the measured tilt's "
-                          f"upper 95 % limit psi + U95 = {settings['tilt_bound_deg']:.3g} deg, "
-                          f"above the stated bound {float(stated_bound):g} deg (A.1) "
-                          "[beyond the draft]")
+        settings, findings, bound_note = _tilt_bound_settings(res, kept, proto, settings,
+                                                              findings)
     e_tilt = None       # E corrected at the measured tilt: the physical reading only
     if budget == "physical" and tilt is None:
         res, e_tilt = angle_deviation_at_measured_tilt(res, kept, proto)
