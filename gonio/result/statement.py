@@ -338,6 +338,13 @@ def p_text(p: float | None) -> str | None:
 
     >>> p_text(0.950001), p_relation(p_text(0.950001)), p_text(0.9500004)
     ('95.000', '≈', '95.000')
+
+    The same for a whole per cent, which the chosen path prints bare (0.99 → "99"): a
+    computed p a hair above one (a sum of probabilities in binary floating point) keeps its
+    zeros, never the round text of a p it is not:
+
+    >>> p_text(0.990000001), p_text(0.98000000001), p_text(0.99), p_text(0.990011)
+    ('99.000', '98.000', '99', '99')
     """
     if p is None or not math.isfinite(float(p)):
         return None
@@ -360,9 +367,25 @@ def p_text(p: float | None) -> str | None:
     while s in CHOSEN_P_TEXTS and d < P_TEXT_MAX_DECIMALS:
         d += 1                      # a computed p is never printed as a chosen one
         s = at(d)
-    if s in CHOSEN_P_TEXTS:         # just above a chosen p at every decimal shown: the zeros
-        s = round_half_up(v, d, rounding=ROUND_FLOOR)       # say it was computed ("95.000")
+    if s in CHOSEN_P_TEXTS or (v < 100.0 and _rounds_to_whole(v)):
+        # just above a chosen p, or just above a whole per cent (the chosen path's own texts,
+        # 0.99 → "99"), at every decimal shown: the zeros say it was computed ("95.000",
+        # "99.000"), never the round value it is not
+        s = round_half_up(v, P_TEXT_MAX_DECIMALS, rounding=ROUND_FLOOR)
     return s
+
+
+def _rounds_to_whole(v: float) -> bool:
+    """Whether a computed per-cent coverage ``v`` (not exactly a whole per cent: those take
+    :func:`p_text`'s chosen path) lies above a whole per cent by less than the last decimal
+    :func:`p_text` can show (:data:`P_TEXT_MAX_DECIMALS`), so that its digits, floored there,
+    are that whole per cent's ("99.000" for 99.0000001).
+
+    >>> _rounds_to_whole(99.0000001), _rounds_to_whole(99.0011), _rounds_to_whole(98.9999)
+    (True, False, False)
+    """
+    s = round_half_up(v, P_TEXT_MAX_DECIMALS, rounding=ROUND_FLOOR)
+    return Decimal(s) == Decimal(s).to_integral_value()
 
 
 #: results.json unit → its printed SI form (degree, hour, second of arc: accepted for use with
