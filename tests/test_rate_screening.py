@@ -135,6 +135,36 @@ def test_missing_programme_point_is_named_and_on_the_certificate(simulated):
     assert "Screening of the readings" in page and f"rate_dps = {rate}" in page
 
 
+def test_a_point_missing_from_a_later_run_is_drawn_against_that_run_s_rates(simulated):
+    """A point dropped from the last calibration run (not the first) leaves that run's
+    residuals one shorter than the first run's rates: the certificate's input–output figure
+    draws each run's residuals against its own rates (was an internal error, exit 1, or the
+    residuals paired with the wrong rates)."""
+    spec, proto, readings, tmp = simulated
+    if not spec.startswith("jjf"):
+        pytest.skip("IEC 62047-20 5.1.3.1 fits one line through every run's points")
+    text, head, header = _rows(readings)
+    runs = sorted({dict(zip(header, next(csv.reader([s]))))["run"] for s in text[head + 1:]
+                   if dict(zip(header, next(csv.reader([s]))))["test"] == "scale_factor"})
+    last = runs[-1]
+    rate = 10.0 if spec.startswith("jjf") else 60.0
+    bad = tmp / "missing-last.csv"
+    assert _drop(readings, bad, lambda row: row["test"] == "scale_factor" and row["run"] == last
+                 and row["role"] == "rate" and abs(float(row["rate_dps"]) - rate) < 1e-9) > 0
+    result, paths = calibrate_file(bad, tmp / "cal-missing-last", protocol=str(proto))
+    js = json.loads(paths["results"].read_text(encoding="utf-8"))
+    assert any(f["code"] == "programme-point-missing" and f"run {last}" in f["message"]
+               for f in js["findings"]), js["findings"]
+    assert any(str(p).endswith(".pdf") for p in paths.values()), paths
+    from gonio.report.rate_figures import _io_points
+    line = _io_points(result.item("scale_factor"))
+    for rates, residuals in line[4]:
+        assert len(rates) == len(residuals)
+    assert len(runs) > 1
+    assert len(line[4][-1][0]) == len(line[4][0][0]) - 1
+    assert rate not in set(np.round(line[4][-1][0], 9))
+
+
 def test_one_missing_sample_is_a_named_gap_not_half_a_record_set_aside(simulated):
     # a logger that drops one sample leaves every later row on the grid, one step further:
     # a fit t₀ + i·Δt by row index set aside every row after the gap (review of stop 28)

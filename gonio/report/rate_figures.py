@@ -117,18 +117,23 @@ def _empty(ax, text: str) -> None:
 def _io_points(it):
     """(rates, mean outputs, K, intercept, residual rows, label) of a scale-factor item, from
     JJF 1535's per-calibration fit (7.2.1: rest-removed means of the first calibration) or
-    IEC 62047-20's single fit (5.1.3.1: outputs with the intercept b_BASE); None without."""
+    IEC 62047-20's single fit (5.1.3.1: outputs with the intercept b_BASE); None without.
+    Each residual row is ``(rates, residuals)``: a calibration run that lost a point (a
+    damaged file) has fewer rates than the first."""
     if it is None:
         return None
     d = it.details
     if "means_m" in d:
         r = np.asarray(d["rates_dps"], float)
+        rates_m = d.get("rates_m") or [r] * len(d["residuals_m"])
+        rows = [(np.asarray(rm, float), np.asarray(v, float))
+                for rm, v in zip(rates_m, d["residuals_m"])]
         return (r, np.asarray(d["means_m"][0], float), float(d["K_m"][0]), float(d["F0_m"][0]),
-                d["residuals_m"], "F̄_j − F_r")
+                rows, "F̄_j − F_r")
     if "x_dps" in d and "y" in d:
         r, y = np.asarray(d["x_dps"], float), np.asarray(d["y"], float)
         K, b = float(it.value), float(d["b_BASE"])
-        return r, y, K, b, [y - (K * r + b)], "output y_j"
+        return r, y, K, b, [(r, y - (K * r + b))], "output y_j"
     return None
 
 
@@ -152,8 +157,9 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
     ax.set_ylabel(_t(L, "output", u=result.metadata.get("output_unit", "")))
     ax.legend(loc="upper left")
     ax.tick_params(which="both", labelbottom=False)   # minor log labels too
-    for m, res in enumerate(residuals):
-        ax2.plot(r[o], np.asarray(res, float)[o], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
+    for m, (rm, res) in enumerate(residuals):
+        om = np.argsort(rm)
+        ax2.plot(rm[om], res[om], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
     ax2.axhline(0, color="0.5", lw=0.6)
     ax2.set_xlabel(_t(L, "rate"))
     ax2.set_ylabel(_t(L, "residual"))

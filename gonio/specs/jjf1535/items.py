@@ -201,6 +201,7 @@ def scale_factor(ctx: Context) -> Item:
         "K_m": Ks, "F0_m": [c["fit"].F0 for c in cals], "rest_m": [c["rest"] for c in cals],
         "se_K_m": [c["se_K"] for c in cals], "Q": Q,
         "rates_dps": cals[0]["rates"], "means_m": [c["fit"].means for c in cals],
+        "rates_m": [c["rates"] for c in cals],
         "residuals_m": [c["fit"].residuals for c in cals]})
 
 
