@@ -143,6 +143,9 @@ CASES = {
                    "per trial tablecalpart's calibration at every position the protocol uses "
                    "(so K_l, C_v and C_g all draw its errors as t of "
                    "TABLE_CALIBRATION_PART_DOF degrees of freedom)",
+    "worstcorner": "the worst condition for K at once: the tilt at the A.1 bound at the "
+                   "worst azimuth (as worst) and the table at the corner (as worsttable, "
+                   "sign drawn); every other Type B effect drawn per trial as in typeb",
 }
 
 #: The standard uncertainty of the table calibration the ``tablecal`` case draws, arcsec
@@ -156,7 +159,7 @@ TABLE_CALIBRATION_PART_DOF = 3.0
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
 #: (a Type B line is one fixed offset there; :func:`item_coverage`'s ``judge_spread``).
-FIXED_CONDITION_CASES = ("worst", "worsttable", "worstharmonic", "worstshape")
+FIXED_CONDITION_CASES = ("worst", "worsttable", "worstharmonic", "worstshape", "worstcorner")
 
 #: Table 1's bound on the rate table's relative rate error (the ``typeb`` case draws within it).
 TABLE_RATE_ERROR_BOUND = 1e-5
@@ -247,7 +250,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
     if case in ("mounted", "typeb", "worsttable", "worstharmonic", "worstshape", "tablecal",
                 "tablecalpart", "tablecaldof"):
         return bench                      # drawn per trial (:func:`trial_bench`)
-    if case == "worst":                   # the other Type B effects drawn per trial
+    if case in ("worst", "worstcorner"):  # the other Type B effects drawn per trial
         psi = float(protocol.annex_a.tilt_bound_deg)
         return tilted(bench, psi, worst_azimuth(bench, protocol, psi))
     raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
@@ -627,6 +630,16 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     True
     >>> trial_bench("worstharmonic", b, p, 3).table.positioning_harmonics[0].order
     3
+
+    ``worstcorner``: ``worst``'s tilt (the bench of :func:`case_bench`) with
+    ``worsttable``'s corner table and draws:
+
+    >>> w = case_bench("worstcorner", b, p)
+    >>> t = trial_bench("worstcorner", w, p, 3)
+    >>> (t.instrument.tilt_deg, t.instrument.tilt_azimuth_deg) == (0.1, w.instrument.tilt_azimuth_deg)
+    True
+    >>> t.table == trial_bench("worsttable", w, p, 3).table
+    True
     """
     if case in ("typeb", "tablecal", "tablecalpart", "tablecaldof"):
         return draw_type_b(bench, protocol, seed)
@@ -643,6 +656,10 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     if case == "worst":
         i = bench.instrument
         return tilted(draw_type_b(bench, protocol, seed), i.tilt_deg, i.tilt_azimuth_deg)
+    if case == "worstcorner":             # worst's tilt, worsttable's table
+        i = bench.instrument
+        return tilted(trial_bench("worsttable", bench, protocol, seed), i.tilt_deg,
+                      i.tilt_azimuth_deg)
     if case != "mounted":
         return bench
     rng = np.random.default_rng([int(seed), 0x7117])
@@ -1334,7 +1351,7 @@ class OpticalStudy:
             t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
             cr = CaseResult(name, CASES[name], list(res), t_int)
             cr.summary = _summarise(cr, s["truth"], bool(s["extra_components"]))
-            if name == "worst":
+            if name in ("worst", "worstcorner"):
                 cr.summary["condition"] = fixed_condition(b, self.protocol)
             if s["monte_carlo_trials"]:
                 t0 = trial_seed(s["seed"], name, 0)
