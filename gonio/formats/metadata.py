@@ -6,6 +6,7 @@ number syntax every reader accepts (see ``docs/formats.md#metadata``).
 
 from __future__ import annotations
 
+import csv
 import math
 import re
 from collections.abc import Mapping
@@ -45,6 +46,41 @@ _NUMBER = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$")
 _NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
 
 
+def is_comment(line: str) -> bool:
+    """Whether ``line`` is a ``#`` metadata line: ``#`` first (after a byte-order mark and
+    blanks), or the same line as a spreadsheet re-saves it, quoted as one cell (``"# …"``).
+
+    >>> is_comment("  # serial: A"), is_comment('"# table: a, b",,'), is_comment("t,#")
+    (True, True, False)
+    """
+    s = line.lstrip("\ufeff \t")
+    return s.startswith("#") or s.startswith('"#')
+
+
+def comment_body(line: str) -> str:
+    """The text after the ``#`` of a metadata line (:func:`is_comment`), as it was written
+    before a spreadsheet re-saved the file: one level of CSV quoting taken off (the line as
+    one quoted cell) and the empty cells a spreadsheet pads every row with to the widest row
+    (trailing commas) dropped. The one reading of a ``#`` line shared by every reader
+    (docs/formats.md#metadata: files re-saved by a spreadsheet).
+
+    >>> comment_body("# serial: RLG-0001,,,,,,")
+    'serial: RLG-0001'
+    >>> comment_body('"# table: a, b",,,')
+    'table: a, b'
+    >>> comment_body("# table: rotary table, 0.1 arcsec,,")
+    'table: rotary table, 0.1 arcsec'
+    """
+    s = line.strip().lstrip("\ufeff").strip()
+    if s.startswith('"#'):
+        try:
+            s = next(csv.reader([s]))[0]
+        except (csv.Error, StopIteration):
+            pass
+    s = s.rstrip(", \t")
+    return (s[1:] if s.startswith("#") else s).strip()
+
+
 def header_lines(path):
     """The leading ``# key: value`` lines of a text file (a stream of gigabytes is never
     read whole), as (key, value) pairs in file order (a line without ``:`` gives the value
@@ -80,9 +116,9 @@ def header_lines(path):
                 s = line.strip()
                 if not s:
                     continue
-                if not s.startswith("#"):
+                if not is_comment(s):
                     return
-                key, _, value = s[1:].partition(":")
+                key, _, value = comment_body(s).partition(":")
                 yield key.strip(), value.strip()
             done = len(complete)
             if not piece:
@@ -104,8 +140,8 @@ def metadata_block(lines, file=None) -> tuple[dict[str, str], int]:
     """
     meta: dict[str, str] = {}
     i = 0
-    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
-        body = lines[i][1:].strip() if lines[i].startswith("#") else ""
+    while i < len(lines) and (is_comment(lines[i]) or not lines[i].strip()):
+        body = comment_body(lines[i]).strip() if is_comment(lines[i]) else ""
         if body:
             if ":" not in body:
                 raise GonioError("metadata line must be '# key: value'", file=file, line=i + 1)

@@ -48,7 +48,7 @@ import pandas as pd
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
-from gonio.formats.metadata import parse_number
+from gonio.formats.metadata import comment_body, is_comment, parse_number
 
 COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                             "temperature_c", "supply_v", "up_axis", "north_axis",
@@ -178,12 +178,12 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     lines = text.split("\n")
     md: dict[str, str] = {}
     i = 0
-    while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
+    while i < len(lines) and (not lines[i].strip() or is_comment(lines[i])):
         s = lines[i].strip()
         i += 1
         if not s:
             continue
-        key, sep, value = s[1:].partition(":")
+        key, sep, value = comment_body(s).partition(":")
         key = key.strip()
         if not sep or not key:
             raise GonioError(f"bad metadata line, expected '# key: value', got {s!r}",
@@ -203,7 +203,7 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     check_near_miss(header, COLUMNS, what="column", file=fname, line=header_line)
     body = "\n".join(lines[i:])
     for j in range(i + 1, len(lines)):
-        if lines[j].lstrip().startswith("#"):
+        if is_comment(lines[j]):
             raise GonioError("metadata line after the header; '#' lines belong at the top",
                              file=fname, line=j + 1)
     try:

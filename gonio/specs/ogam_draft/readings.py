@@ -45,7 +45,8 @@ from gonio.atomic import write_text
 from gonio.errors import (GonioError, MissingColumnError, check_header, check_near_miss,
                           read_utf8)
 from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
-                                    metadata_float, metadata_gyro_type, parse_number)
+                                    comment_body, is_comment, metadata_float, metadata_gyro_type,
+                                    parse_number)
 from gonio.formats.metadata import show_value as _show
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
@@ -180,11 +181,11 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         idx += 1
         if not line.strip():
             continue
-        if line.lstrip().startswith("#"):
+        if is_comment(line):
             if header is not None:
                 raise GonioError("metadata line after the header; '#' lines belong at the top",
                                  file=fname, line=idx)
-            body = line.lstrip()[1:]
+            body = comment_body(line)
             key, sep, value = body.partition(":")
             key = key.strip()
             if not sep or not key:
@@ -284,7 +285,7 @@ def _split_lines(body: str, first: int, header: list[str], fname: str):
         if not raw or raw.isspace():
             continue
         ln = first + off + 1
-        if raw.lstrip().startswith("#"):
+        if is_comment(raw):
             structural = GonioError("metadata line after the header; '#' lines belong at the "
                                     "top", file=fname, line=ln)
             break
