@@ -113,6 +113,40 @@ def new_pg_database(server: str) -> str:
     return f"{server}/{name}"
 
 
+def both_back_ends(tmp_path: Path, server: str) -> list[tuple[str | None, Path]]:
+    """(url, data folder) of new records on SQLite (url None, ``tmp_path/sqlite``) and on a
+    new database of the throwaway PostgreSQL ``server`` (``tmp_path/pg``), for the
+    migration tests that run once on each."""
+    return [(None, tmp_path / "sqlite"), (new_pg_database(server), tmp_path / "pg")]
+
+
+def records_at(url: str | None, data: Path, revision: str):
+    """A store opened without upgrading and migrated up to ``revision`` only: the records
+    as that revision wrote them, for a migration test to write its rows into."""
+    from gonio.records.db import migrate, open_store
+
+    st = open_store(url, data, upgrade=False)
+    migrate(st.engine, revision)
+    return st
+
+
+def insert_instrument(conn, sha256: str = "a" * 64, size: int = 1,
+                      created_at: str = "2025-01-01") -> None:
+    """Rows every schema since 0001 has, written by hand as an old revision holds them: a
+    stored file ``sha256`` of ``size`` bytes, customer 1 ('C') and its instrument 1 (serial
+    'S', ogam-draft), all created at ``created_at``."""
+    from sqlalchemy import text
+
+    conn.execute(text("INSERT INTO blobs (sha256, size, created_at) VALUES (:s, :n, :t)"),
+                 {"s": sha256, "n": size, "t": created_at})
+    conn.execute(text("INSERT INTO customers (id, name, address, created_at) VALUES "
+                      "(1, 'C', '', :t)"), {"t": created_at})
+    conn.execute(text(
+        "INSERT INTO instruments (id, customer_id, kind, manufacturer, model, serial, "
+        "spec_key, limits_json, created_at) VALUES (1, 1, '', '', '', 'S', 'ogam-draft', "
+        "'[]', :t)"), {"t": created_at})
+
+
 @pytest.fixture(params=["sqlite", "postgresql"])
 def store(request, tmp_path):
     """An open, migrated records store on SQLite or on PostgreSQL (a new database)."""

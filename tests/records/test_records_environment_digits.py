@@ -136,25 +136,16 @@ def test_migration_0012_over_0011(tmp_path, pg_server):
     row keeps printing what the page printed before (6 significant digits: 20.0 → "20"), on
     the page's text, in the laboratory file written for it; none entered stays none; down to
     0011 the numbers stay and the texts go — on SQLite and PostgreSQL."""
-    from gonio.records.db import migrate, open_store
+    from gonio.records.db import open_store
     from gonio.web.front import fmt
 
-    from .conftest import new_pg_database
+    from .conftest import both_back_ends, insert_instrument, records_at
 
     old = {1: (20.0, 45.5), 2: (20.25, 40.0), 3: (None, None)}
-    for url in (None, new_pg_database(pg_server)):
-        data = tmp_path / ("pg" if url else "sqlite")
-        st = open_store(url, data, upgrade=False)
-        migrate(st.engine, "0011")
+    for url, data in both_back_ends(tmp_path, pg_server):
+        st = records_at(url, data, "0011")
         with st.engine.begin() as c:
-            c.execute(text("INSERT INTO blobs (sha256, size, created_at) VALUES "
-                           "(:s, 1, '2025-01-01')"), {"s": "a" * 64})
-            c.execute(text("INSERT INTO customers (id, name, address, created_at) VALUES "
-                           "(1, 'C', '', '2025-01-01')"))
-            c.execute(text(
-                "INSERT INTO instruments (id, customer_id, kind, manufacturer, model, serial, "
-                "spec_key, limits_json, created_at) VALUES (1, 1, '', '', '', 'S', "
-                "'ogam-draft', '[]', '2025-01-01')"))
+            insert_instrument(c)
             for cid, (t, h) in old.items():
                 _old_row(c, cid, t, h)
         st.close()

@@ -290,23 +290,14 @@ def test_backup_restore_keeps_the_register(store, tmp_path):
 def test_migration_0009_over_0008(tmp_path, pg_server):
     """A database made at 0008 with a calibration, upgraded: the register exists, empty, and
     the calibration used none — on SQLite and PostgreSQL."""
-    from gonio.records.db import migrate, open_store
+    from gonio.records.db import open_store
 
-    from .conftest import new_pg_database
+    from .conftest import both_back_ends, insert_instrument, records_at
 
-    for url in (None, new_pg_database(pg_server)):
-        data = tmp_path / ("pg" if url else "sqlite")
-        st = open_store(url, data, upgrade=False)
-        migrate(st.engine, "0008")
+    for url, data in both_back_ends(tmp_path, pg_server):
+        st = records_at(url, data, "0008")
         with st.engine.begin() as c:
-            c.execute(text("INSERT INTO blobs (sha256, size, created_at) VALUES "
-                           "(:s, 1, '2025-01-01')"), {"s": "a" * 64})
-            c.execute(text("INSERT INTO customers (id, name, address, created_at) VALUES "
-                           "(1, 'C', '', '2025-01-01')"))
-            c.execute(text(
-                "INSERT INTO instruments (id, customer_id, kind, manufacturer, model, serial, "
-                "spec_key, limits_json, created_at) VALUES (1, 1, '', '', '', 'S', "
-                "'ogam-draft', '[]', '2025-01-01')"))
+            insert_instrument(c)
             c.execute(text(
                 "INSERT INTO calibrations (id, instrument_id, spec_key, protocol, "
                 "readings_sha256, readings_name, lab_name, place, performed_on, status, "

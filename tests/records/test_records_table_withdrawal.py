@@ -387,15 +387,13 @@ def test_migration_0010_over_0009(tmp_path, pg_server):
     withdrawn entry's day registrable again with a corrected file; back down to 0009 the database's rules
     return, and a register holding such a pair is refused by the down-migration in words —
     on SQLite and PostgreSQL."""
-    from gonio.records.db import migrate, open_store
+    from gonio.records.db import open_store
 
-    from .conftest import new_pg_database
+    from .conftest import both_back_ends, records_at
     from .test_result_statement import _downgrade
 
-    for url in (None, new_pg_database(pg_server)):
-        data = tmp_path / ("pg" if url else "sqlite")
-        st = open_store(url, data, upgrade=False)
-        migrate(st.engine, "0009")
+    for url, data in both_back_ends(tmp_path, pg_server):
+        st = records_at(url, data, "0009")
         # today's services read and write a later column of a table 0009 and 0010 leave
         # alone (0011's standards.out_of_service): added by hand, as 0011 adds it, so that
         # the set-up can run through them at 0009

@@ -135,22 +135,18 @@ def test_existing_records_upgrade_keeping_their_calibrations(backend, request, t
     from sqlalchemy import text as sql
     from sqlalchemy.exc import IntegrityError
 
-    from gonio.records.db import make_engine, migrate, open_store
+    from gonio.records.db import open_store
+
+    from .conftest import insert_instrument, records_at
 
     url = None
     if backend == "postgresql":
         from .conftest import new_pg_database
         url = new_pg_database(request.getfixturevalue("pg_server"))
-    old = open_store(url, tmp_path / "data", upgrade=False)
-    migrate(old.engine, "0001")
+    old = records_at(url, tmp_path / "data", "0001")
     now = "2026-01-02 03:04:05"
     with old.engine.begin() as c:
-        c.execute(sql(f"INSERT INTO blobs VALUES ('{'a' * 64}', 3, '{now}')"))
-        c.execute(sql(f"INSERT INTO customers (id, name, address, created_at) "
-                      f"VALUES (1, 'C', '', '{now}')"))
-        c.execute(sql(f"INSERT INTO instruments (id, customer_id, kind, manufacturer, model, "
-                      f"serial, spec_key, limits_json, created_at) VALUES (1, 1, '', '', '', "
-                      f"'S', 'ogam-draft', '[]', '{now}')"))
+        insert_instrument(c, size=3, created_at=now)
         c.execute(sql(f"INSERT INTO calibrations (id, instrument_id, spec_key, protocol, "
                       f"readings_sha256, readings_name, place, performed_on, status, progress, "
                       f"error, worker_host, created_at, review_comment, pending_reason, "
