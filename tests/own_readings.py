@@ -38,14 +38,16 @@ def own_text(text: str, unmark: bool = True) -> str:
 
 
 def unmarked(text: str) -> str:
-    """``text`` with the last written digit of every other measured cell (by an unkeyed CRC
-    of its line) moved by one (9 → 8, else up): readings of the same values at the same
-    resolution, with the parities of a laboratory's own recording (not the bench's
-    watermark, gonio.formats.watermark)."""
+    """``text`` as a laboratory's own recording of the same values, without the bench's
+    watermark (gonio.formats.watermark): in a rate or triad file the last written digit of
+    every other measured cell (by an unkeyed CRC of its line) moved by one (9 → 8, else up),
+    readings of the same values at the same resolution with parities of their own; in an
+    optical file every time written at the millisecond (a laboratory's clock), the counts
+    as they are."""
     import zlib
 
-    from gonio.formats.watermark import COLUMNS
-    out, header = [], None
+    from gonio.formats.watermark import TIME_COLUMN, marked_columns
+    out, header, cols = [], None, {}
     for line in text.splitlines(keepends=True):
         if line.startswith("#") or not line.strip() or '"' in line:
             out.append(line)
@@ -54,12 +56,36 @@ def unmarked(text: str) -> str:
         cells = body.split(",")
         if header is None:
             header = cells
+            cols = marked_columns(header)
             out.append(line)
             continue
-        for j, name in enumerate(header):
-            if name in COLUMNS and j < len(cells) and re.fullmatch(r"-?\d+(\.\d+)?", cells[j]) \
-                    and zlib.crc32(f"{j}{body}".encode()) & 1:
+        for j, name in cols.items():
+            if j >= len(cells) or not re.fullmatch(r"-?\d+(\.\d+)?", cells[j]):
+                continue
+            if name == TIME_COLUMN:
+                cells[j] = f"{float(cells[j]):.3f}"
+            elif zlib.crc32(f"{j}{body}".encode()) & 1:
                 d = int(cells[j][-1])
                 cells[j] = cells[j][:-1] + str(8 if d == 9 else d + 1)
+        out.append(",".join(cells) + line[len(body):])
+    return "".join(out)
+
+
+def resaved(text: str) -> str:
+    """``text`` as a spreadsheet re-saves it in its General format: every numeric cell of a
+    data row (not the ``#`` lines, not the header) written as ``'%.15g' % float(cell)``
+    (``60.0`` → ``60``, ``2501.70`` → ``2501.7``, 17 significant digits → 15)."""
+    num = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+    out, header = [], False
+    for line in text.splitlines(keepends=True):
+        if line.startswith("#") or not line.strip():
+            out.append(line)
+            continue
+        body = line.rstrip("\r\n")
+        if not header:
+            header = True
+            out.append(line)
+            continue
+        cells = [("%.15g" % float(c)) if num.match(c) else c for c in body.split(",")]
         out.append(",".join(cells) + line[len(body):])
     return "".join(out)

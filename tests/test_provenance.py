@@ -25,7 +25,7 @@ import pytest
 
 from gonio.formats.provenance import provenance, readings_provenance
 from gonio.report.i18n import labels
-from tests.own_readings import BENCH_KEYS, own_text
+from tests.own_readings import BENCH_KEYS, own_text, resaved
 
 HERE = Path(__file__).resolve().parent
 PINS = HERE / "data" / "pins"
@@ -98,12 +98,14 @@ LAB_OWN = "|".join(BENCH_KEYS)
 
 
 def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "",
-                       unmark: bool = True) -> Path:
+                       unmark: bool = True, resave: bool = False) -> Path:
     """``gonio simulate`` then ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
     expression of metadata keys whose lines are deleted from the readings first
     (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`, its
     values without the bench's watermark unless ``unmark`` is False: then the header lines
-    of the readings and of the files they name are edited alike, the watermark kept)."""
+    of the readings and of the files they name are edited alike, the watermark kept);
+    ``resave``: the edited files then re-saved as a spreadsheet does
+    (:func:`tests.own_readings.resaved`: ``60.0`` → ``60``, 15 significant digits)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
     gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
@@ -112,14 +114,15 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
         readings = work / "lab-readings.csv"
         text = "".join(x for x in lines if not re.match(r"# (%s):" % strip, x))
-        readings.write_text(own_text(text, unmark) if strip == LAB_OWN else text,
+        save = resaved if resave else (lambda t: t)
+        readings.write_text(save(own_text(text, unmark) if strip == LAB_OWN else text),
                             encoding="utf-8")
         for extra in ("thermal.csv",):
-            if (sim / extra).exists() and unmark:
+            if (sim / extra).exists() and unmark and not resave:
                 shutil.copy(sim / extra, work / extra)
             elif (sim / extra).exists():
-                (work / extra).write_text(own_text((sim / extra).read_text(encoding="utf-8"),
-                                                   unmark), encoding="utf-8")
+                (work / extra).write_text(save(own_text((sim / extra).read_text(encoding="utf-8"),
+                                                        unmark)), encoding="utf-8")
     gonio("calibrate", readings, "--spec", spec, *proto, "--lab", lab, "--dcc", "--out", cal,
           cwd=work)
     return cal
@@ -238,12 +241,13 @@ def test_laboratory_readings_are_not_marked(tmp_path):
 @pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
 def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, tmp_path):
     """Simulated readings with every metadata line that names the bench deleted (bench, seed,
-    generator, noise) and every "virtual" name replaced, the file renamed: the values' own
-    watermark (gonio.formats.watermark) marks them virtual on every PDF page, in the HTML,
+    generator, noise) and every "virtual" name replaced, the file renamed and re-saved as a
+    spreadsheet does ('%.15g' of every number: 60.0 → 60): the values' own watermark
+    (gonio.formats.watermark) marks them virtual on every PDF page, in the HTML,
     summary.txt, results.json and the DCC, for every specification."""
     cal = simulate_calibrate(spec, protocol, seed, tmp_path,
                              lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN,
-                             unmark=False)
+                             unmark=False, resave=True)
     lab_readings = (tmp_path / "lab-readings.csv").read_text(encoding="utf-8")
     assert not re.search(r"(?im)^# (bench|seed|generator|noise):|virtual", lab_readings)
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
@@ -404,3 +408,56 @@ def test_the_flag_follows_what_is_contradicted(tmp_path):
     summary = (out / "summary.txt").read_text(encoding="utf-8")
     assert f"temperature: {t + 5!r} °C [CONTRADICTED" in summary
     assert "serial: " + md["serial"] + " [" not in summary
+
+
+@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+def test_a_stream_without_its_bench_lines_is_marked(fmt, tmp_path):
+    """``gonio simulate --stream`` (the RLG bench at 20 Hz, the small optical programme), its
+    bench, seed, generator and "virtual" names deleted — the ``#`` lines of a CSV stream, the
+    key-value metadata of a Parquet stream — calibrated with the laboratory file: the
+    stream's times carry the bench's watermark (gonio.formats.watermark), so every PDF page,
+    summary.txt, results.json and the DCC say virtual; the same seed gives the same bytes."""
+    bench = tmp_path / "rlg20.toml"
+    bench.write_text((ROOT / "protocols/benches/rlg.toml").read_text(encoding="utf-8")
+                     .replace("sample_rate_hz = 1000.0", "sample_rate_hz = 20.0"),
+                     encoding="utf-8")
+    assert "sample_rate_hz = 20.0" in bench.read_text(encoding="utf-8")
+    name = f"stream.{fmt}"
+    sims = []
+    for run in ("a", "b"):
+        gonio("simulate", "--protocol", PINS / "ogam-draft-small.toml", "--bench", bench,
+              "--seed", 3, "--out", tmp_path / run, "--stream", "--stream-format", fmt,
+              cwd=tmp_path)
+        sims.append((tmp_path / run / name).read_bytes())
+    assert sims[0] == sims[1]
+    src, dst = tmp_path / "a" / name, tmp_path / f"lab-{name}"
+    says_virtual = re.compile(r"(?i)^(bench|seed|generator|noise)$")
+    if fmt == "csv":
+        text = src.read_text(encoding="utf-8")
+        kept = [ln for ln in text.splitlines(keepends=True)
+                if not (ln.startswith("#") and (says_virtual.match(ln[1:].split(":")[0].strip())
+                                                or "virtual" in ln.lower()))]
+        dst.write_text("".join(kept), encoding="utf-8")
+        assert "virtual" not in dst.read_text(encoding="utf-8").lower()
+    else:
+        import pyarrow.parquet as pq
+        tab = pq.read_table(src)
+        md = {k.decode(): v.decode() for k, v in (tab.schema.metadata or {}).items()}
+        keep = {k: v for k, v in md.items()
+                if not says_virtual.match(k) and "virtual" not in v.lower()}
+        assert len(keep) < len(md) and "counter_bits" in keep
+        pq.write_table(tab.replace_schema_metadata(keep), dst)
+    cal = tmp_path / "cal"
+    gonio("calibrate", dst, "--spec", "ogam-draft", "--protocol", PINS / "ogam-draft-small.toml",
+          "--lab", lab_file(tmp_path, 'on_mismatch = "proceed"'), "--dcc", "--out", cal,
+          cwd=tmp_path)
+    prov = json.loads((cal / "results.json").read_text(encoding="utf-8"))["provenance"]
+    assert prov["virtual"] is True and prov["evidence"] == ["watermark"], prov
+    assert prov["watermark"]["matching"] == prov["watermark"]["cells"] >= 1000
+    pages = pdf_pages(cal / "certificate.pdf")
+    for i, text in enumerate(pages, 1):
+        assert BANNER in text, f"{fmt} stream: PDF page {i} of {len(pages)} lacks the mark"
+    assert labels("en")["virtual"] in (cal / "certificate.html").read_text(encoding="utf-8")
+    first = (cal / "summary.txt").read_text(encoding="utf-8").splitlines()[0]
+    assert first.startswith("VIRTUAL BENCH EXAMPLE") and "watermark" in first
+    assert 'id="virtual-bench"' in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")

@@ -1,7 +1,9 @@
 """The virtual bench's watermark in its readings' values (gonio.formats.watermark,
 docs/formats.md#watermark): every file ``gonio simulate`` writes carries it, for all four
-specifications; it survives deleting every ``#`` line, deleting and reordering rows and a
-renamed file; it moves no value by more than one unit of its last written digit; and
+specifications; it survives deleting every ``#`` line, deleting and reordering rows, a
+renamed file and a spreadsheet's re-save ('%.15g' of every number); it moves no optical
+count or angle at all (the optical mark is in the times' nanosecond) and no other value by
+more than one unit of its column's last decimal; and
 readings not written by the bench (the repository's hand-made files, random real-looking
 readings, the bench's own readings perturbed by noise) are flagged at most at the test's
 stated level, checked against scipy.stats.binomtest.
@@ -20,8 +22,9 @@ import pytest
 from scipy.stats import binomtest
 
 from gonio.formats.provenance import readings_provenance
-from gonio.formats.watermark import ALPHA, COLUMNS, MIN_CELLS, detect, detect_text, mark_text
-from tests.own_readings import own_text, unmarked
+from gonio.formats.watermark import (ALPHA, MIN_CELLS, TIME_COLUMN, detect, detect_text,
+                                     mark_text, marked_columns)
+from tests.own_readings import own_text, resaved, unmarked
 
 HERE = Path(__file__).resolve().parent
 PINS = HERE / "data" / "pins"
@@ -76,12 +79,17 @@ def test_marked_and_survives_edits(spec, simulated, tmp_path):
         assert not detect_text(unmarked(text))["virtual"]
         assert not detect_text(own_text(text))["virtual"]
         assert detect_text(own_text(text, unmark=False))["virtual"]
+        # a spreadsheet's re-save of the laboratory's copy (60.0 → 60, 2501.70 → 2501.7,
+        # 17 significant digits → 15) keeps every cell's mark
+        again = detect_text(resaved(own_text(text, unmark=False)))
+        assert again["virtual"] and again["matching"] == again["cells"] == full["cells"], again
+        assert resaved(text) != text
 
 
 def _cells(text: str):
     head, rows = _data_lines(text)
     header = head[0].rstrip("\n").split(",")
-    cols = [j for j, n in enumerate(header) if n in COLUMNS]
+    cols = list(marked_columns(header))
     return [(r.rstrip("\n").split(",")[j]) for r in rows for j in cols]
 
 
@@ -130,16 +138,22 @@ def _lab_like(rng, n: int, resolution_decimals: int) -> str:
 
 
 def test_false_positive_rate_on_real_looking_readings():
-    """400 real-looking files (random outputs at three resolutions, random constant columns):
+    """400 real-looking files (random outputs at four resolutions, random constant columns):
     none flagged, and the test's p-values are those of Binomial(n, 1/2) — the share below
-    0.05 is within a 99.9 % binomial interval of 5 % — checked by scipy.stats.binomtest."""
+    0.05 is within a 99.9 % binomial interval of 5 % — checked by scipy.stats.binomtest.
+    (Whole outputs, no decimal: a column the bench does not mark, so no cell is tested.)"""
     rng = np.random.default_rng(2026)
     small = 0
-    trials = 400
-    for t in range(trials):
-        text = _lab_like(rng, int(rng.integers(30, 300)), int(rng.integers(0, 4)))
+    trials = 0
+    for t in range(400):
+        decimals = int(rng.integers(0, 4))
+        text = _lab_like(rng, int(rng.integers(30, 300)), decimals)
         got = detect_text(text)
         assert not got["virtual"], got
+        if decimals == 0:          # whole outputs: a column the bench would not mark
+            assert got["cells"] == 0 and got["p_value"] is None, got
+            continue
+        trials += 1
         ref = binomtest(got["matching"], got["cells"], 0.5, alternative="greater").pvalue
         assert got["p_value"] == pytest.approx(ref, rel=1e-9)
         small += got["p_value"] <= 0.05
@@ -175,3 +189,79 @@ def test_level_and_smallest_file():
     assert binomtest(20, 20, 0.5, alternative="greater").pvalue <= ALPHA
     assert binomtest(19, 19, 0.5, alternative="greater").pvalue > ALPHA
     assert MIN_CELLS == 20
+
+
+def test_optical_mark_moves_no_measured_value(simulated):
+    """The optical readings' mark is in ``time_s``'s nanosecond digit only: marking the
+    laboratory-like recording of a simulated file (times at the millisecond) leaves every
+    count, angle and set point as it was, and moves each time by at most 1 ns."""
+    text = (simulated[("ogam-draft", "a")] / "readings.csv").read_text(encoding="utf-8")
+    plain = unmarked(text)
+    again = mark_text(plain)
+    assert detect_text(again)["virtual"] and not detect_text(plain)["virtual"]
+    head, rows_a = _data_lines(plain)
+    _, rows_b = _data_lines(again)
+    header = head[0].rstrip("\n").split(",")
+    assert list(marked_columns(header).values()) == [TIME_COLUMN]
+    j = header.index(TIME_COLUMN)
+    moved = 0
+    for a, b in zip(rows_a, rows_b):
+        ca, cb = a.rstrip("\n").split(","), b.rstrip("\n").split(",")
+        assert ca[:j] + ca[j + 1:] == cb[:j] + cb[j + 1:], (a, b)
+        d = abs(Decimal(ca[j]) - Decimal(cb[j]))
+        assert d <= Decimal("1e-9"), (a, b)
+        moved += d > 0
+    assert moved > 0
+
+
+def test_short_values_are_padded_and_exact_columns_left_alone():
+    """A value written with fewer digits than its column moves by one unit of the column's
+    last decimal (2.0 among 13-decimal values: by 10⁻¹³, not 0.1); a column with no decimal
+    at all (an exact 0.0 or integer output) is not marked."""
+    rng = np.random.default_rng(4)
+    rows = [f"{i},{rng.normal(10, 1):.13f},0.0,{int(rng.integers(0, 9))}" for i in range(60)]
+    rows[7] = "7,2.0,0.0,3"
+    text = "step,out_x,sd_x,out_y\n" + "\n".join(rows) + "\n"
+    got = mark_text(text)
+    a, b = _data_lines(text)[1], _data_lines(got)[1]
+    for x, y in zip(a, b):
+        cx, cy = x.rstrip("\n").split(","), y.rstrip("\n").split(",")
+        assert abs(Decimal(cx[1]) - Decimal(cy[1])) <= Decimal("1e-13"), (x, y)
+        assert len(cy[1].partition(".")[2]) == 13
+        assert cx[2:] == cy[2:]                  # sd_x 0.0 and the integer out_y unmarked
+    assert abs(Decimal(b[7].split(",")[1]) - 2) <= Decimal("1e-13")
+    assert detect_text(got)["virtual"] and detect_text(got)["cells"] == 60
+
+
+def test_optical_real_looking_readings_are_not_flagged():
+    """400 real-looking optical files (times on a millisecond clock, counts of a real
+    counter): none flagged, and the p-values are Binomial(n, 1/2)'s (scipy.stats.binomtest)."""
+    rng = np.random.default_rng(2027)
+    small = 0
+    for t in range(400):
+        n = int(rng.integers(30, 300))
+        times = np.cumsum(rng.integers(500, 20000, n)) / 1000.0
+        body = "".join(f"angle_deviation,1,{i + 1},60.0,up,{float(times[i])!r},{i * 30.0},"
+                       f"{int(rng.integers(0, 10**8))},\n" for i in range(n))
+        got = detect_text("test,series,round,rate_dps,orientation,time_s,table_deg,"
+                          "gyro_counts,gyro_deg\n" + body)
+        assert not got["virtual"] and got["cells"] == n, got
+        ref = binomtest(got["matching"], got["cells"], 0.5, alternative="greater").pvalue
+        assert got["p_value"] == pytest.approx(ref, rel=1e-9)
+        small += got["p_value"] <= 0.05
+    ci = binomtest(small, 400, 0.05).proportion_ci(0.999)
+    assert ci.low <= 0.05 <= ci.high or small / 400 < 0.05, small
+
+
+def test_detect_reads_no_further_than_it_needs(tmp_path):
+    """A file longer than MAX_CELLS cells is decided on its first MAX_CELLS cells, whatever
+    follows (here bytes that are no CSV at all). (Its memory: benchmarks/watermark_memory.py.)"""
+    from gonio.formats.watermark import MAX_CELLS
+    rng = np.random.default_rng(5)
+    body = "".join(f"bias,0,0,record,{i},0,{rng.normal(2500, 1):.2f}\n"
+                   for i in range(MAX_CELLS + 10))
+    p = tmp_path / "r.csv"
+    p.write_bytes(("test,run,step,role,time_s,rate_dps,output\n" + body).encode()
+                  + b"\xff\x00" * 1000 + b"\n1,2,3\n")
+    got = detect(p)
+    assert got["cells"] == MAX_CELLS and not got["virtual"]

@@ -1170,7 +1170,10 @@ class StreamWriter:
     (int64; uint64 for an unsigned 64-bit counter; double when
     ``counts_quantised: false``), ``table_deg``, ``temperature_c`` (double), row
     groups of :data:`PARQUET_ROW_GROUP` rows. Use as a context manager: an
-    exception inside the ``with`` leaves no file behind.
+    exception inside the ``with`` leaves no file behind. ``watermark=True`` (the virtual
+    bench's streams) writes each time with the bench's watermark in its 1 ns digit
+    (:func:`gonio.formats.watermark.mark_stream_times`): in the data, so that it survives
+    the metadata's deletion in CSV and in Parquet alike.
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "s.csv"
@@ -1184,9 +1187,11 @@ class StreamWriter:
     """
 
     def __init__(self, path: str | Path, metadata: Mapping[str, str] | None = None, *,
-                 table: bool = True, temperature: bool = False, fmt: str | None = None):
+                 table: bool = True, temperature: bool = False, fmt: str | None = None,
+                 watermark: bool = False):
         import pyarrow as pa
         self.path = Path(path)
+        self.watermark = watermark
         self.fmt = fmt or stream_format(self.path)
         if self.fmt not in STREAM_FORMATS:
             raise GonioError(f"unknown stream format {self.fmt!r} (known: "
@@ -1256,6 +1261,12 @@ class StreamWriter:
                 if a.shape != t.shape or not np.all(np.isfinite(a)):
                     raise GonioError(f"{name} must be finite, one value per sample")
                 arrays.append(a)
+        if self.watermark:
+            from gonio.formats.watermark import mark_stream_times
+            t = mark_stream_times(t, arrays[1:])
+            if not (t[0] > self._last_t and np.all(np.diff(t) > 0)):
+                raise GonioError("stream times closer than the watermark's 3 ns")
+            arrays[0] = t
         tab = pa.Table.from_arrays([pa.array(a) for a in arrays], schema=self._schema)
         if self.fmt == "parquet":
             self._buffer.append(tab)

@@ -1,40 +1,62 @@
 """The virtual bench's keyed watermark in the readings themselves (docs/formats.md#watermark).
 
-Every readings file the virtual bench writes (``gonio simulate``, ``gonio demo``: the optical
-draft's readings, the rate specifications' readings, the triad's readings and thermal
-readings) carries, besides its ``# bench:``/``# seed:``/``# generator:`` lines, a mark in its
-measured values, so that readings keep their provenance when those lines are deleted or
-edited, rows are deleted or reordered, or the file is renamed.
+Every readings file and stream the virtual bench writes (``gonio simulate``, ``gonio demo``,
+``gonio simulate --stream`` as CSV or Parquet: the optical draft's readings and streams, the
+rate specifications' readings, the triad's readings and thermal readings) carries, besides its
+``# bench:``/``# seed:``/``# generator:`` lines, a mark in its values, so that readings keep
+their provenance when those lines (or a Parquet file's key-value metadata) are deleted or
+edited, rows are deleted or reordered, the file is renamed, or a spreadsheet re-saves it.
 
 What it is
-    For each cell of a measured column (:data:`COLUMNS`) of a data row, a keyed bit
-    ``b = BLAKE2b(key, column ␟ the row's other cells)`` (:func:`cell_bit`): a pseudo-random
-    bit of the row itself (its test, step, time, set points …), not of its position. The
-    virtual bench writes every such value with the parity of its last written digit equal to
-    ``b`` (:func:`mark_text`): where it is not, the last written digit is moved by one (9 → 8,
-    0 → 1, else up or down by a second keyed bit), so no value moves by more than one unit of
-    its last written digit: one count of the optical counter, one step of the rate bench's
-    output resolution (the rate bench's values are first written with their column's
-    decimals, e.g. ``2501.70``, so that the step is the resolution, not ten of it), one unit
-    in the 15th–17th significant digit of the triad's full-precision values.
+    For each marked cell of a data row, a keyed bit ``b = BLAKE2b(key, column ␟ the row's
+    other cells)`` (:func:`cell_bit`), the other cells taken in their canonical form
+    (:func:`canonical`: a number as ``'%.15g'`` of its value, so ``60.0``, ``60`` and
+    ``6E1`` key alike): a pseudo-random bit of the row itself (its test, step, counts, set
+    points …), not of its position nor of how its numbers are spelt. The virtual bench
+    writes every marked value ``v`` so that the integer ``q = v·10ᵈ`` (``d`` the column's
+    marked decimal) has the parity ``b``: where the bench's value does not, ``q`` is moved by
+    one (up or down by a second keyed bit;
+    up from zero). The parity is a property of the value, not of
+    its text: a re-save that keeps the value (``2501.70`` → ``2501.7``) keeps the mark.
+Which cells
+    - The optical draft's readings and streams (a ``gyro_counts`` or ``gyro_deg`` column):
+      ``time_s`` only, at :data:`TIME_DECIMALS` = 9 (one nanosecond). No measured value
+      moves: the counts and angles are written as the bench made them; a reading's time
+      moves by at most 1 ns (a 60 °/s rotation turns 0.2 µ″ in it; the Earth rate 4·10⁻⁹ ″),
+      far below the bench's own timing (the counter is read at the sample clock).
+    - The rate specifications' ``output`` and the triad's ``out_*``/``sd_*``: at the
+      column's decimals ``d`` (the most decimals a value of the column is written with,
+      at most ``15 −`` the digits of its largest whole part, so that every value survives
+      a re-save at 15 significant digits): each value is written with ``d`` decimals (a
+      value written with fewer is padded, so it moves by one unit of the column's ``d``-th
+      decimal, never of its own last digit), one step of the rate bench's output
+      resolution, 10⁻¹¹–10⁻¹³ of the triad's full-precision values. A column whose values
+      have no decimals at all (an exact integer or 0.0 column) is not marked: one unit
+      would then be a whole one.
 How it is detected
-    :func:`detect` reads the data rows (the ``#`` lines are not used), takes each measured
-    cell once per distinct row context (at most :data:`MAX_CELLS`), counts the cells whose
-    last digit's parity equals their bit (``k`` of ``n``) and computes the one-sided binomial
-    tail ``P(K ≥ k)`` for ``K ~ Binomial(n, 1/2)``. The readings are the virtual bench's when
-    ``n ≥`` :data:`MIN_CELLS` and that tail is at most :data:`ALPHA`.
+    :func:`detect` reads a CSV file line by line, or a Parquet stream batch by batch, and
+    stops at :data:`MAX_CELLS` distinct cells (at most :data:`MAX_ROWS` rows): a file's size
+    costs nothing. The ``#`` lines and Parquet metadata are not used. It takes each marked
+    cell once per distinct row context, counts the cells whose ``q`` has the parity of their
+    bit (``k`` of ``n``) and computes the one-sided binomial tail ``P(K ≥ k)`` for
+    ``K ~ Binomial(n, 1/2)``. The readings are the virtual bench's when ``n ≥``
+    :data:`MIN_CELLS` and that tail is at most :data:`ALPHA`.
 False positives
     On readings not written by the bench, the bit of each distinct row context is a keyed
-    pseudo-random function of cells the parity is not part of, so each cell matches with
-    probability 1/2 independently of what the values are (constant, even only, quantised):
-    a file is flagged with probability at most :data:`ALPHA` = 10⁻⁶ (the binomial test's
-    own level; exactly ``2⁻ⁿ`` at ``k = n``), whatever its size. A marked file of ``n`` cells
-    has ``k = n``: 27 cells (the smallest built-in protocol) give ``2⁻²⁷ ≈ 7.5·10⁻⁹``.
+    pseudo-random function of cells the marked value is not part of, so each cell matches
+    with probability 1/2 independently of what the values are (constant, even only,
+    quantised, times on a millisecond grid): a file is flagged with probability at most
+    :data:`ALPHA` = 10⁻⁶ (the binomial test's own level; exactly ``2⁻ⁿ`` at ``k = n``),
+    whatever its size. A marked file of ``n`` cells has ``k = n``: 27 cells (the smallest
+    built-in protocol) give ``2⁻²⁷ ≈ 7.5·10⁻⁹``.
 What it does not do
     It is not a security seal: the key is in this module, so anyone who means to can strip
-    it. Readings perturbed in their last digit (re-rounded, noise added) lose it. Readings
-    acquired through ``gonio acquire`` from the virtual bench's instruments are marked by
-    their instruments' identification, not by this watermark.
+    it. Readings perturbed in their marked digit (re-rounded, noise added, times re-written
+    at fewer decimals) lose it. A time of 10⁶ s or more is not marked at 1 ns by a 15-digit
+    re-save (such rows count as unmarked, never as marked). Readings acquired through
+    ``gonio acquire`` from the virtual bench's instruments are marked by their instruments'
+    identification, not by this watermark. Files the bench wrote before the mark moved to
+    the optical times and to canonical keys are recognised by their metadata only.
 """
 
 from __future__ import annotations
@@ -42,15 +64,21 @@ from __future__ import annotations
 import csv
 import hashlib
 import re
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
+import numpy as np
+
 #: The key (a constant of gonio: the watermark marks provenance, it does not seal it).
-KEY = b"gonio virtual bench readings watermark v1"
-#: The measured columns the watermark is written into and read from (the optical draft's
-#: counter and angle output, the rate specifications' output, the triad's outputs and their
-#: standard deviations).
-COLUMNS: tuple[str, ...] = ("gyro_counts", "gyro_deg", "output",
-                            "out_x", "out_y", "out_z", "sd_x", "sd_y", "sd_z")
+KEY = b"gonio virtual bench readings watermark v2"
+#: The measured columns the watermark is written into and read from in a rate or triad file
+#: (the rate specifications' output, the triad's outputs and their standard deviations).
+COLUMNS: tuple[str, ...] = ("output", "out_x", "out_y", "out_z", "sd_x", "sd_y", "sd_z")
+#: The optical draft's measured columns: a file holding one is marked in its ``time_s``.
+OPTICAL_COLUMNS: tuple[str, ...] = ("gyro_counts", "gyro_deg")
+#: The optical readings' and streams' marked column and its decimal (1 ns).
+TIME_COLUMN = "time_s"
+TIME_DECIMALS = 9
 #: The level of the detection's binomial test: a file not written by the bench is flagged
 #: with probability at most this.
 ALPHA = 1e-6
@@ -58,29 +86,92 @@ ALPHA = 1e-6
 MIN_CELLS = 20
 #: The most distinct cells the detection reads (a large file is decided on its first rows).
 MAX_CELLS = 20000
-#: A column whose values have at most this many decimals is written with its column's
-#: decimals (a quantised output: the last digit is then the resolution's step).
-PAD_DECIMALS = 6
+#: The most data rows the detection reads (rows whose contexts repeat add no cell).
+MAX_ROWS = 400000
+#: The most significant digits a marked value is written with (a spreadsheet keeps 15).
+SIGNIFICANT = 15
 
-_NUMBER = re.compile(r"^[+-]?\d+(\.\d+)?([eE][+-]?\d+)?$")
+_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 
 
 def cell_bit(column: str, context: str) -> tuple[int, int]:
-    """The keyed parity bit of a measured cell and the direction bit the writer moves by."""
+    """The keyed parity bit of a marked cell and the direction bit the writer moves by."""
     h = hashlib.blake2b(f"{column}\x1f{context}".encode(), key=KEY, digest_size=2).digest()
     return h[0] & 1, h[1] & 1
 
 
-def _mantissa_digit(token: str) -> int | None:
-    if not _NUMBER.match(token):
+def canonical(cell) -> str:
+    """A cell as the watermark keys it: a number as ``'%.15g'`` of its value (−0 as 0), so
+    that a spreadsheet's re-save (``60.0`` → ``60``) keys alike; any other text stripped.
+
+    >>> canonical("60.0"), canonical("60"), canonical(" 6E1"), canonical("-0"), canonical("+x")
+    ('60', '60', '60', '0', '+x')
+    """
+    if isinstance(cell, (int, float, np.integer, np.floating)):
+        return "%.15g" % (float(cell) + 0.0)
+    c = str(cell).strip()
+    if _NUMBER.match(c):
+        return "%.15g" % (float(c) + 0.0)
+    return c
+
+
+def _value(cell) -> Decimal | None:
+    """A marked cell's value at 15 significant digits (None: not a finite number)."""
+    if isinstance(cell, (int, float, np.integer, np.floating)):
+        f = float(cell)
+    else:
+        c = str(cell).strip()
+        if not _NUMBER.match(c):
+            return None
+        f = float(c)
+    if not np.isfinite(f):
         return None
-    m = re.split(r"[eE]", token)[0]
-    return int(m[-1])
+    return Decimal("%.15g" % f)
+
+
+def _decimals(v: Decimal) -> int:
+    return max(0, -v.normalize().as_tuple().exponent) if v != 0 else 0
+
+
+def _whole_digits(v: Decimal) -> int:
+    a = abs(v)
+    return len(str(int(a))) if a >= 1 else 1
+
+
+def _q(v: Decimal, d: int) -> int:
+    return int(v.scaleb(d).to_integral_value())
+
+
+def marked_columns(header) -> dict[int, str]:
+    """{index: name} of the marked columns of a header (module docstring, Which cells)."""
+    names = [str(h).strip().lstrip("\ufeff") for h in header]
+    if any(n in OPTICAL_COLUMNS for n in names):
+        return {j: n for j, n in enumerate(names) if n == TIME_COLUMN}
+    return {j: n for j, n in enumerate(names) if n in COLUMNS}
+
+
+def column_decimals(name: str, values) -> int:
+    """The decimal a column is marked at (module docstring): :data:`TIME_DECIMALS` for the
+    optical time; else the most decimals of its values, at most 15 − the digits of its
+    largest whole part; 0 (not marked) where no value has a decimal.
+
+    >>> column_decimals("output", [Decimal("2501.7"), Decimal("2501.73")])
+    2
+    >>> column_decimals("sd_x", [Decimal("0"), Decimal("2")])
+    0
+    """
+    if name == TIME_COLUMN:
+        return TIME_DECIMALS
+    vals = [v for v in values if v is not None]
+    if not vals:
+        return 0
+    d = max(_decimals(v) for v in vals)
+    return max(0, min(d, SIGNIFICANT - max(_whole_digits(v) for v in vals)))
 
 
 def _iter_rows(lines):
     """(line index, cells) of a CSV text's lines, the header first: '#' lines and blank
-    lines skipped."""
+    lines skipped. ``lines`` may be any iterable (a file read lazily)."""
     for i, line in enumerate(lines):
         s = line.rstrip("\r\n")
         if not s.strip() or s.lstrip("\ufeff").startswith("#"):
@@ -88,95 +179,129 @@ def _iter_rows(lines):
         yield i, (next(csv.reader([s])) if '"' in s else s.split(","))
 
 
-def _rows(lines):
-    """(header, [(line index, cells)]) of a CSV text's lines (:func:`_iter_rows`)."""
-    it = _iter_rows(lines)
-    first = next(it, None)
-    header = None if first is None else [c.strip().lstrip("\ufeff") for c in first[1]]
-    return header, list(it)
+def _context(cells, marked) -> str:
+    return "\x1f".join(canonical(c) for j, c in enumerate(cells) if j not in marked)
 
 
-def _context(cells, marked: set[int]) -> str:
-    return "\x1f".join(c for j, c in enumerate(cells) if j not in marked)
-
-
-def _pad(token: str, decimals: int) -> str:
-    if "e" in token.lower() or decimals <= 0:
-        return token
-    whole, _, frac = token.partition(".")
-    return f"{whole}.{frac.ljust(decimals, '0')}"
+def _fixed(q: int, d: int) -> str:
+    return f"{Decimal(q).scaleb(-d):.{d}f}"
 
 
 def mark_text(text: str) -> str:
-    """``text`` (a readings file's CSV text, the virtual bench's) with every measured cell
+    """``text`` (a readings file's CSV text, the virtual bench's) with every marked cell
     carrying the watermark (module docstring). Deterministic: the same text gives the same
-    bytes. Lines with quoted cells are left as they are."""
+    bytes; marking marked text changes nothing. Lines with quoted cells are left as they
+    are. A measured value is written with its column's decimals; a time whose value does
+    not change keeps its text (``12.05`` stays ``12.05``), one that does is written with
+    nine decimals."""
     lines = text.splitlines(keepends=True)
-    header, rows = _rows(lines)
-    if header is None:
+    rows = _iter_rows(lines)
+    first = next(rows, None)
+    if first is None:
         return text
-    cols = {j: name for j, name in enumerate(header) if name in COLUMNS}
+    header = [c.strip().lstrip("\ufeff") for c in first[1]]
+    cols = marked_columns(header)
     if not cols:
         return text
-    decimals = {}
-    for j in cols:
-        tokens = [c[j] for _, c in rows if len(c) == len(header) and _NUMBER.match(c[j])
-                  and "e" not in c[j].lower()]
-        d = max((len(t.partition(".")[2]) for t in tokens), default=0)
-        decimals[j] = d if d <= PAD_DECIMALS else 0
+    rows = [(i, c) for i, c in rows if len(c) == len(header) and '"' not in lines[i]]
+    decimals = {j: column_decimals(name, [_value(c[j]) for _, c in rows])
+                for j, name in cols.items()}
     marked = set(cols)
     for i, cells in rows:
-        if len(cells) != len(header) or '"' in lines[i]:
-            continue
         ctx = _context(cells, marked)
         for j, name in cols.items():
-            tok = _pad(cells[j], decimals[j])
-            digit = _mantissa_digit(tok)
-            if digit is None:
+            d = decimals[j]
+            v = _value(cells[j])
+            if d <= 0 or v is None:
                 continue
+            q = _q(v, d)
             bit, up = cell_bit(name, ctx)
-            if digit % 2 != bit:
-                new = 8 if digit == 9 else 1 if digit == 0 else digit + (1 if up else -1)
-                mant, sep, exp = _split_exp(tok)
-                tok = mant[:-1] + str(new) + sep + exp
-            cells[j] = tok
+            if q % 2 != bit:
+                q += 1 if up or q == 0 else -1      # a zero (a first time) stays ≥ 0
+            if name != TIME_COLUMN or Decimal(q).scaleb(-d) != Decimal(cells[j].strip()):
+                cells[j] = _fixed(q, d)
         end = lines[i][len(lines[i].rstrip("\r\n")):]
         lines[i] = ",".join(cells) + end
     return "".join(lines)
 
 
-def _split_exp(token: str) -> tuple[str, str, str]:
-    for sep in ("e", "E"):
-        if sep in token:
-            mant, exp = token.split(sep, 1)
-            return mant, sep, exp
-    return token, "", ""
+def mark_stream_times(time_s, columns) -> np.ndarray:
+    """A stream chunk's times carrying the watermark: each time at 1 ns
+    (:data:`TIME_DECIMALS`) with the parity of its row's bit, keyed on the row's other cells
+    as written (``columns``: the counter's wrapped values, the table angle, the temperature,
+    in the file's column order). Each time moves by at most 1.5 ns.
+
+    >>> t = mark_stream_times(np.array([0.0, 0.05, 0.1]), [np.array([0, 11, 23])])
+    >>> bool(np.all(np.abs(t - [0.0, 0.05, 0.1]) <= 1.5e-9)), bool(np.all(np.diff(t) > 0))
+    (True, True)
+    """
+    t = np.asarray(time_s, dtype=np.float64)
+    scale = 10 ** TIME_DECIMALS
+    q = np.rint(t * scale).astype(np.int64)
+    cols = [np.asarray(c).tolist() for c in columns]
+    out = np.empty(t.size, dtype=np.int64)
+    for i in range(t.size):
+        ctx = "\x1f".join(canonical(c[i]) for c in cols)
+        bit, up = cell_bit(TIME_COLUMN, ctx)
+        qi = int(q[i])
+        if qi % 2 != bit:
+            qi += 1 if up or qi == 0 else -1
+        out[i] = qi
+    return out / scale
+
+
+class _Tally:
+    """The detection's count over distinct (column, context) cells."""
+
+    def __init__(self, cols: dict[int, str]):
+        self.cols = cols
+        self.seen: set[tuple[str, str]] = set()
+        self.cells: list[tuple[str, str, Decimal]] = []
+        self.rows = 0
+
+    def add(self, cells) -> bool:
+        """Take one row's cells; False once enough are read."""
+        self.rows += 1
+        ctx = _context(cells, self.cols)
+        for j, name in self.cols.items():
+            v = _value(cells[j])
+            if v is None or (name, ctx) in self.seen:
+                continue
+            self.seen.add((name, ctx))
+            self.cells.append((name, ctx, v))
+        return len(self.cells) < MAX_CELLS and self.rows < MAX_ROWS
+
+    def result(self) -> dict:
+        dec = {name: column_decimals(name, [v for n, _, v in self.cells if n == name])
+               for name in set(self.cols.values())}
+        n = k = 0
+        for name, ctx, v in self.cells[:MAX_CELLS]:
+            d = dec[name]
+            if d <= 0:
+                continue
+            n += 1
+            k += _q(v, d) % 2 == cell_bit(name, ctx)[0]
+        p = tail_probability(k, n) if n >= MIN_CELLS else None
+        return {"virtual": p is not None and p <= ALPHA, "cells": n, "matching": k,
+                "p_value": p}
+
+
+def _detect_lines(lines) -> dict:
+    rows = _iter_rows(lines)
+    first = next(rows, None)
+    header = [] if first is None else [c.strip().lstrip("\ufeff") for c in first[1]]
+    tally = _Tally(marked_columns(header))
+    if tally.cols:
+        for _, cells in rows:
+            if len(cells) == len(header) and not tally.add(cells):
+                break
+    return tally.result()
 
 
 def detect_text(text: str) -> dict:
     """The watermark's test on a CSV text: ``{"virtual", "cells", "matching", "p_value"}``
     (module docstring); ``p_value`` None where fewer than :data:`MIN_CELLS` cells."""
-    rows = _iter_rows(text.splitlines())
-    first = next(rows, None)
-    header = [] if first is None else [c.strip().lstrip("\ufeff") for c in first[1]]
-    cols = {j: n for j, n in enumerate(header) if n in COLUMNS}
-    seen: set[tuple[str, str]] = set()
-    n = k = 0
-    for _, cells in rows:
-        if len(cells) != len(header):
-            continue
-        ctx = _context(cells, set(cols))
-        for j, name in cols.items():
-            digit = _mantissa_digit(cells[j].strip())
-            if digit is None or (name, ctx) in seen:
-                continue
-            seen.add((name, ctx))
-            n += 1
-            k += digit % 2 == cell_bit(name, ctx)[0]
-        if n >= MAX_CELLS:
-            break
-    p = tail_probability(k, n) if n >= MIN_CELLS else None
-    return {"virtual": p is not None and p <= ALPHA, "cells": n, "matching": k, "p_value": p}
+    return _detect_lines(iter(text.splitlines()))
 
 
 def tail_probability(k: int, n: int) -> float:
@@ -186,14 +311,40 @@ def tail_probability(k: int, n: int) -> float:
     return float(binom.sf(k - 1, n, 0.5))
 
 
+_NONE = {"virtual": False, "cells": 0, "matching": 0, "p_value": None}
+
+
+def _detect_parquet(path: Path) -> dict:
+    import pyarrow.parquet as pq
+    pf = pq.ParquetFile(path)
+    names = pf.schema_arrow.names
+    tally = _Tally(marked_columns(names))
+    if not tally.cols:
+        return dict(_NONE)
+    for batch in pf.iter_batches(batch_size=1 << 14):
+        cols = [batch.column(j).to_pylist() for j in range(len(names))]
+        for i in range(batch.num_rows):
+            if not tally.add([c[i] for c in cols]):
+                return tally.result()
+    return tally.result()
+
+
 def detect(path) -> dict:
-    """:func:`detect_text` of a readings file (a CSV text file; any other file, or one that
-    cannot be read as text, gives ``virtual`` False and no cells)."""
+    """:func:`detect_text` of a readings file or CSV stream, read line by line up to
+    :data:`MAX_CELLS` cells; a Parquet stream's columns, batch by batch; a JSON file, or a
+    file that cannot be read, gives ``virtual`` False and no cells."""
     p = Path(path)
-    if p.suffix.lower() in (".parquet", ".json"):
-        return {"virtual": False, "cells": 0, "matching": 0, "p_value": None}
+    suffix = p.suffix.lower()
+    if suffix == ".json":
+        return dict(_NONE)
     try:
-        text = p.read_text(encoding="utf-8", errors="replace")
+        if suffix == ".parquet":
+            return _detect_parquet(p)
+        with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+            return _detect_lines(fh)
     except OSError:
-        return {"virtual": False, "cells": 0, "matching": 0, "p_value": None}
-    return detect_text(text)
+        return dict(_NONE)
+    except Exception as e:          # a damaged Parquet file: its reader refuses it in words
+        if suffix == ".parquet" and type(e).__module__.startswith("pyarrow"):
+            return dict(_NONE)
+        raise

@@ -248,17 +248,21 @@ def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None 
     return " ".join([L["virtual"] + "."] + virtual_lines(res, L))
 
 
-#: readings SHA-256 → whether the readings name the virtual bench, per blob folder: a stored
-#: file never changes under its SHA-256, so its answer is read once (one metadata header)
+#: readings SHA-256 → whether the readings are the virtual bench's, per blob folder: a stored
+#: file never changes under its SHA-256, so its answer is read once (its metadata header, and
+#: its values' watermark read lazily up to its first 20 000 cells: a file's size costs nothing)
 _VIRTUAL_READINGS: dict[tuple[str, str], bool] = {}
 
 
 def virtual_readings(store, readings_sha256: str | None) -> bool:
     """Whether a calibration's stored readings are the virtual bench's, from their own
     metadata (:func:`gonio.formats.provenance.provenance`: ``# bench:``, ``# seed:``,
-    ``# generator: gonio``), as the lists mark each calibration; read once per stored file
-    and kept (the answer of a content-addressed file cannot change). A file that is missing
-    or unreadable is not marked (and not kept: its calibration's own page says why)."""
+    ``# generator: gonio``) or the watermark in their values
+    (:func:`gonio.formats.provenance.file_provenance`: read line by line, or a Parquet
+    stream batch by batch, up to its first cells), as the lists mark each calibration; read
+    once per stored file and kept (the answer of a content-addressed file cannot change). A
+    file that is missing or unreadable is not marked (and not kept: its calibration's own
+    page says why)."""
     from gonio.errors import GonioError
     from gonio.formats.provenance import readings_provenance
     from gonio.records.blobs import blob_path

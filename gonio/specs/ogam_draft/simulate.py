@@ -47,7 +47,8 @@ def simulate(out, *, protocol="ogam-draft", bench="rlg", seed: int = 0, table=No
         temp_c = proto.conditions.temperature_c + b.chamber_deviation_c \
             if b.chamber_deviation_c else None
         writer = StreamWriter((active_stage(out) or Path(out)) / name, stream_metadata(proto, b, seed),
-                              table=True, temperature=temp_c is not None, fmt=stream_format)
+                              table=True, temperature=temp_c is not None, fmt=stream_format,
+                              watermark=True)   # the bench's mark in the data (watermark.py)
         total = sum(k.k_end - k.k_start for k in plan_session(proto, b, None))
         prog = Progress(total, label=f"simulate: {name}", unit="samples")
 
