@@ -265,3 +265,22 @@ def test_detect_reads_no_further_than_it_needs(tmp_path):
                   + b"\xff\x00" * 1000 + b"\n1,2,3\n")
     got = detect(p)
     assert got["cells"] == MAX_CELLS and not got["virtual"]
+
+
+def test_stream_times_follow_the_cell_definition():
+    """:func:`mark_stream_times` (vectorised, the stream writer's) gives every time the
+    parity of the bit :func:`cell_bit` gives its row's other cells in their canonical form,
+    moving it by at most 1.5 ns and keeping the times increasing; integer and float columns,
+    −0.0, a huge value and a table at rest (repeated angles) alike."""
+    from gonio.formats.watermark import TIME_DECIMALS, canonical, cell_bit, mark_stream_times
+    rng = np.random.default_rng(12)
+    n = 3000
+    t = 1000.0 + np.arange(n) / 1000.0
+    counts = np.cumsum(rng.integers(-80, 80, n))
+    table = np.repeat(rng.normal(0.0, 100.0, n // 100), 100)
+    table[:5], table[5:10] = -0.0, 1e20
+    got = mark_stream_times(t, [counts, table])
+    assert np.all(np.abs(got - t) <= 1.5e-9) and np.all(np.diff(got) > 0)
+    for i in range(n):
+        bit = cell_bit(TIME_COLUMN, f"{canonical(int(counts[i]))}\x1f{canonical(float(table[i]))}")[0]
+        assert round(got[i] * 10**TIME_DECIMALS) % 2 == bit, i

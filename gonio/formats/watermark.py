@@ -238,16 +238,35 @@ def mark_stream_times(time_s, columns) -> np.ndarray:
     t = np.asarray(time_s, dtype=np.float64)
     scale = 10 ** TIME_DECIMALS
     q = np.rint(t * scale).astype(np.int64)
-    cols = [np.asarray(c).tolist() for c in columns]
-    out = np.empty(t.size, dtype=np.int64)
-    for i in range(t.size):
-        ctx = "\x1f".join(canonical(c[i]) for c in cols)
-        bit, up = cell_bit(TIME_COLUMN, ctx)
-        qi = int(q[i])
-        if qi % 2 != bit:
-            qi += 1 if up or qi == 0 else -1
-        out[i] = qi
-    return out / scale
+    texts = [_canonical_column(np.asarray(c)) for c in columns]
+    rows = map("\x1f".join, zip(*texts)) if texts else [""] * t.size
+    keyed = hashlib.blake2b(key=KEY, digest_size=2)     # cell_bit's hash, its key set once
+    keyed.update(f"{TIME_COLUMN}\x1f".encode())
+
+    def digest(row: str) -> bytes:
+        x = keyed.copy()
+        x.update(row.encode())
+        return x.digest()
+    h = [digest(r) for r in rows]
+    d = np.frombuffer(b"".join(h), dtype=np.uint8).reshape(-1, 2) & 1
+    bit, up = d[:, 0].astype(np.int64), d[:, 1].astype(bool)
+    move = (q % 2) != bit
+    q = q + np.where(move, np.where(up | (q == 0), 1, -1), 0)
+    return q / scale
+
+
+def _canonical_column(a: np.ndarray) -> list[str]:
+    """:func:`canonical` of every value of a stream column, at once (the same texts)."""
+    if a.dtype.kind in "iu" and (a.size == 0 or int(np.max(np.abs(a.astype(np.float64)))) < 10**15):
+        return a.astype(str).tolist()
+    seen: dict[float, str] = {}         # a table at rest repeats its angle
+    out = []
+    for x in np.asarray(a, dtype=np.float64).tolist():
+        c = seen.get(x)
+        if c is None:
+            c = seen[x] = "%.15g" % (x + 0.0)
+        out.append(c)
+    return out
 
 
 class _Tally:
