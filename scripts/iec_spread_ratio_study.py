@@ -20,7 +20,11 @@ from gonio.specs.iec62047_20 import formulas as ief
 
 
 def ratio_exact_upper(d, nu, p=0.95):
-    """The upper end exact were the true spreads in the ratio of the observed ones."""
+    """The upper end an interval exact at the data's OWN spread ratio would take: the
+    per-record one-sided level a ≥ (1 − p)/2 at which max_i U_i(a) misses max σ with
+    probability (1 − p)/2 were the true spreads in the ratio of the observed ones
+    (P(miss) = Π_i F_ν(χ²_ν,a·(δ_max/δ_i)²)). Exact at equal spreads when the data say so.
+    Also the alternative tests/test_iec_level_z.py checks max_spread_bounds against."""
     r = d / d.max()
 
     def miss(a):

@@ -14,6 +14,7 @@ import pytest
 
 from gonio.specs.iec62047_20.formulas import max_spread_estimate, max_spread_moments
 from gonio.specs.iec62047_20.items import startup_time_record
+from tests._helpers import power_on_record, transient_interval_means
 
 
 # --------------------------------------------------------------------------- 5.1.3.7
@@ -124,10 +125,9 @@ def _closed_form_truth() -> float:
 
 def _white_records(rng, n_rec, sigma):
     t = np.arange(N, dtype=float)
-    tr = A_DPS * TAU_S * (np.exp(-t / TAU_S) - np.exp(-(t + 1) / TAU_S))   # interval means
+    tr = transient_interval_means(A_DPS, TAU_S, t)
     for _ in range(n_rec):
-        y = tr + sigma * rng.standard_normal(N)
-        yield t.reshape(-1, P).mean(1), y.reshape(-1, P).mean(1), y
+        yield power_on_record(t, tr + sigma * rng.standard_normal(N), P)
 
 
 def test_startup_count_reads_late_where_the_transient_flattens():

@@ -23,6 +23,7 @@ from scipy import stats
 
 from gonio.analysis.coverage import clopper_pearson, item_coverage, level_z_at
 from gonio.specs.iec62047_20 import formulas as ief
+from tests._helpers import load_by_path
 
 
 def test_hysteresis_g_is_the_least_favourable_probability():
@@ -128,20 +129,9 @@ def test_study_judges_the_level_z():
         level_z_at({"value": [1.0, 0.5], "z": [0.0, 1.0]}, 0.7)
 
 
-def _ratio_exact_upper(d, nu, p=0.95):
-    """The upper end an interval exact at the data's OWN spread ratio would take: the
-    per-record one-sided level a ≥ (1 − p)/2 at which max_i U_i(a) misses max σ with
-    probability (1 − p)/2 were the true spreads in the ratio of the observed ones
-    (P(miss) = Π_i F_ν(χ²_ν,a·(δ_max/δ_i)²)). Exact at equal spreads when the data say so."""
-    from scipy import optimize
-
-    r = d / d.max()
-
-    def miss(a):
-        q = stats.chi2.ppf(a, nu)
-        return float(np.prod(stats.chi2.cdf(q / r ** 2, nu))) - (1 - p) / 2
-    a = optimize.brentq(miss, (1 - p) / 2, 1 - 1e-9) if miss((1 - p) / 2) < 0 else (1 - p) / 2
-    return float(np.max(d * np.sqrt(nu / stats.chi2.ppf(a, nu))))
+#: the upper end an interval exact at the data's OWN spread ratio would take (the study
+#: script's, scripts/iec_spread_ratio_study.py, which prints the same comparison per ratio)
+_ratio_exact_upper = load_by_path("scripts/iec_spread_ratio_study.py").ratio_exact_upper
 
 
 def test_an_upper_end_exact_at_the_datas_spread_ratio_misses_between():

@@ -17,6 +17,7 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
 from gonio.specs.iec62047_20.items import bias_tc_budget, startup_time_by_count
 from gonio.specs.iec62047_20.protocol import load_protocol, temperature_visits
+from tests._helpers import power_on_record, transient_interval_means
 
 A_DPS, TAU_S, BAND_DPS, P, N = 0.12, 150.0, 0.05, 10, 900     # the bench and the programme
 
@@ -25,7 +26,7 @@ def _startup_records(rng, n_rec, sigma, q, n=N):
     """Block means of A·e^(−t/τ) (exact interval means), white noise σ per sample and a
     random walk of q °/s/√s; the truth from the noise-free blocks by the clause's rule."""
     t = np.arange(n, dtype=float)
-    tr = A_DPS * TAU_S * (np.exp(-t / TAU_S) - np.exp(-(t + 1) / TAU_S))
+    tr = transient_interval_means(A_DPS, TAU_S, t)
     blocks = tr.reshape(-1, P).mean(1)
     settled = tr[-n // 5:].mean()
     out = np.flatnonzero(np.abs(blocks - settled) > BAND_DPS)
@@ -33,7 +34,7 @@ def _startup_records(rng, n_rec, sigma, q, n=N):
     recs = []
     for _ in range(n_rec):
         y = tr + sigma * rng.standard_normal(n) + q * np.cumsum(rng.standard_normal(n))
-        recs.append((t.reshape(-1, P).mean(1), y.reshape(-1, P).mean(1), y))
+        recs.append(power_on_record(t, y, P))
     return truth, recs
 
 
@@ -178,11 +179,11 @@ def _bench_noise_records(rng, n_rec, k_mul):
     g = replace(g, arw_tc1_per_c=0.0, rrw_dph_sqrt_h=g.rrw_dph_sqrt_h * k_mul)
     assert (g.warmup_bias_dps, g.warmup_tau_s) == (A_DPS, TAU_S)
     t = np.arange(1800, dtype=float)
-    tr = A_DPS * TAU_S * (np.exp(-t / TAU_S) - np.exp(-(t + 1) / TAU_S))
+    tr = transient_interval_means(A_DPS, TAU_S, t)
     recs = []
     for _ in range(n_rec):
         y = tr + NoiseState(g, rng).samples(t.size, 1.0, g.reference_temperature_c)
-        recs.append((t.reshape(-1, P).mean(1), y.reshape(-1, P).mean(1), y))
+        recs.append(power_on_record(t, y, P))
     k2 = (g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)) ** 2
     return recs, (k2, (g.bias_instability_dph / S_PER_H) ** 2)
 

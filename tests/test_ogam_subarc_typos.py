@@ -20,8 +20,7 @@ from scipy.stats import beta
 from gonio.cli import main
 from gonio.formats.toml import read_toml
 from gonio.resources import resolve
-from gonio.specs.ogam_draft.bench import Bench, load_bench, run_session
-from gonio.specs.ogam_draft.bench.config import InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
 from gonio.specs.ogam_draft.readings import Readings, read_readings
@@ -29,6 +28,7 @@ from gonio.specs.ogam_draft.screen import (HARMONIC_MIN, SPREAD_FLOOR_STEPS,
                                            line_critical_value, line_departures, screen)
 from gonio.specs.ogam_draft.study import study_bench
 from gonio.units import ARCSEC_PER_DEG
+from tests._helpers import small_ogam_bench, tiny_ogam_protocol
 
 #: (test, rate, orientation, round) of the reading damaged in each clause.
 WHERE = {"7.1": ("scale_factor", "60.0", "up", 3),
@@ -220,27 +220,12 @@ def _sim(protocol, bench, seed):
     return df, dict(res.metadata), res
 
 
-def tiny_programme():
-    """2 series × 3 positions of 7.4, 7.1 at two stops (tests/test_validate_engine.py)."""
-    return parse_protocol({
-        "protocol": {"name": "tiny"},
-        "session": {"static_s": 5.0, "warm_up_s": 0.0},
-        "scale_factor": {"rounds": [{"stop_deg": 180.0}, {"stop_deg": 360.0}],
-                         "read_delay_s": 2.0, "rest_s": 3.0},
-        "angle_deviation": {"series": 2, "rest_s": 3.0, "read_delay_s": 2.0,
-                            "rounds": [{"stop_deg": 120.0 * i} for i in range(1, 4)]}})
-
-
 @pytest.mark.parametrize("seed", [3340895419, 1, 2, 3, 4])
 def test_a_clean_small_programme_calibrates_with_nothing_set_aside(seed):
     """Seed 3340895419 had a good 7.4 reading 1.904″ from the others' line set aside at
     7 · s = 1.06″ (s from five readings' MAD)."""
-    p = tiny_programme()
-    bench = Bench("small", InstrumentConfig(nominal_scale_factor_counts_per_deg=76434.87,
-                                            arw_dpsh=0.003, quantisation=True),
-                  TableConfig(positioning_random_arcsec=0.05), latitude_deg=40.0,
-                  sample_rate_hz=10.0)
-    df, md, res = _sim(p, bench, seed)
+    p = tiny_ogam_protocol()        # 2 series × 3 positions of 7.4, 7.1 at two stops
+    df, md, res = _sim(p, small_ogam_bench(), seed)
     assert [f.message for f in screen(Readings(df, md, None), p)
             if f.action != "flagged"] == []
     a = analyse(Readings(df, md, None), p, budget="draft", static_record=res.static_record)

@@ -11,28 +11,10 @@ import pytest
 
 import gonio.pipeline.validate as V
 import gonio.specs.ogam_draft.study as S
-from gonio.specs.ogam_draft.bench import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.progress import Progress
-from gonio.specs.ogam_draft.protocol import parse_protocol
-
-
-def tiny_protocol():
-    return parse_protocol({
-        "protocol": {"name": "tiny"},
-        "session": {"static_s": 5.0, "warm_up_s": 0.0},
-        "scale_factor": {"rounds": [{"stop_deg": 180.0}, {"stop_deg": 360.0}],
-                         "read_delay_s": 2.0, "rest_s": 3.0},
-        "angle_deviation": {"series": 2, "rest_s": 3.0, "read_delay_s": 2.0,
-                            "rounds": [{"stop_deg": 120.0 * i} for i in range(1, 4)]},
-    })
-
-
-def bench():
-    inst = InstrumentConfig(nominal_scale_factor_counts_per_deg=76434.87, arw_dpsh=0.003,
-                            quantisation=True)
-    return Bench("small", inst, TableConfig(positioning_random_arcsec=0.05), latitude_deg=40.0,
-                 sample_rate_hz=10.0)
+# (bench and tiny_protocol: also read by the fuzz tests from this module)
+from tests._helpers import small_ogam_bench as bench, tiny_ogam_protocol as tiny_protocol
 
 
 def run(**kw):
