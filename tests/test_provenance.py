@@ -161,6 +161,30 @@ def test_contradicting_lab_file_is_refused(run):
         assert "temperature" in r.stderr and "more than 1 °C apart" in r.stderr, r.stderr
 
 
+def test_the_measured_room_temperature_speaks_where_the_metadata_are_silent(run):
+    """A rate file without its ``# room_temperature_c`` line still measured the room: the
+    laboratory file's temperature 5 °C off the median of the room tests' ``temperature_c``
+    column is refused naming that column, and one within 1 °C of it calibrates."""
+    spec, seed, cal = run
+    if spec not in ("jjf1535-2015", "iec62047-20"):
+        pytest.skip("only the rate files log a temperature column")
+    work = cal.parent
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    text = (work / "sim" / "readings.csv").read_text(encoding="utf-8")
+    room = float(re.search(r"^# room_temperature_c: (.*)$", text, re.M).group(1))
+    quiet = work / "no-room-line.csv"
+    quiet.write_text(re.sub(r"^# (room_)?temperature_c:.*\n", "", text, flags=re.M),
+                     encoding="utf-8")
+    for name, t, rc in (("hot.toml", room + 5.0, 2), ("room.toml", room + 0.5, 0)):
+        lab = lab_file(work, 'on_mismatch = "refuse"', name=name, temperature_c=t)
+        lab.write_text(re.sub(r"^\[instrument\]\n.*?\n\n", "", lab.read_text(),
+                              flags=re.S | re.M))
+        r = gonio("calibrate", quiet, "--spec", spec, *proto, "--lab", lab, "--out",
+                  work / f"measured-{rc}", cwd=work, rc=rc)
+        if rc:
+            assert "temperature_c column" in r.stderr and "1 °C apart" in r.stderr, r.stderr
+
+
 def test_proceeding_states_the_contradiction(run):
     spec, seed, cal = run
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))

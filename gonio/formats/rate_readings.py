@@ -406,3 +406,49 @@ def _float_cells(col: pd.Series, fmt: str) -> np.ndarray:
     out = np.array([fmt % v for v in vals.tolist()], dtype=object)
     out[np.isnan(vals)] = ""
     return out
+
+
+#: The rate readings' tests run in a temperature chamber away from the room: their
+#: ``temperature_c`` is the set point's, not the laboratory's (:func:`room_temperature_measured`).
+CHAMBER_TESTS: tuple[str, ...] = ("sf_temperature", "bias_temperature")
+
+
+def room_temperature_measured(path) -> dict:
+    r"""The room temperature a rate readings file measured: the median of the logged
+    ``temperature_c`` of the rows of the tests run in the room (every test but
+    :data:`CHAMBER_TESTS`), as ``{"temperature_c": (text, where)}`` for the identity check
+    (:func:`gonio.pipeline.identity.check_identity` ``measured``); ``{}`` where the file has
+    no such column or no finite value in those rows (a blank between a slow logger's rows is
+    no value). Read row by row; a row the screening will set aside can move a median of
+    thousands of rows by nothing that matters against the check's 1 °C.
+
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp(); f = os.path.join(d, "r.csv")
+    >>> _ = open(f, "w").write("# spec: jjf1535-2015\ntest,run,step,role,time_s,output,"
+    ...     "temperature_c\nbias,0,0,record,0,1,20.0\nbias,0,0,record,1,1,\n"
+    ...     "bias_temperature,0,0,record,2,1,85\nbias,0,0,record,3,1,20.4\n")
+    >>> room_temperature_measured(f)["temperature_c"][0]
+    '20.2'
+    """
+    import csv as _csv
+    import statistics
+
+    values = []
+    with open(path, encoding="utf-8-sig", newline="") as fh:
+        rows = _csv.reader(line for line in fh if line.strip() and not is_comment(line))
+        header = [h.strip() for h in next(rows, [])]
+        if "temperature_c" not in header or "test" not in header:
+            return {}
+        it, ic = header.index("test"), header.index("temperature_c")
+        for row in rows:
+            if len(row) <= max(it, ic) or row[it].strip() in CHAMBER_TESTS:
+                continue
+            v = parse_number(row[ic]) if row[ic].strip() else None
+            if v is not None and math.isfinite(v):
+                values.append(v)
+    if not values:
+        return {}
+    med = statistics.median(values)
+    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of {len(values)} "
+                              "rows of the tests run in the room")}
+

@@ -55,7 +55,7 @@ def _first(md: dict, keys) -> tuple[str | None, str | None]:
     return None, None
 
 
-def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
+def contradictions(metadata: dict, lab: dict | None, measured: dict | None = None) -> list[dict]:
     """Each contradiction between the readings' ``metadata`` and ``lab`` (a loaded laboratory
     file): ``{"what", "key" (the metadata key), "readings", "lab", "lab_key", "tolerance"}``.
 
@@ -69,6 +69,15 @@ def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
     >>> [c["lab_key"] for c in contradictions({"gyro_type": "fog"},
     ...                                       {"instrument": {"gyro_type": "RLG"}})]
     ['instrument.gyro_type']
+
+    ``measured``: what the readings measured where their metadata are silent
+    (``{"temperature_c": (text, where)}``, a specification's ``measured_conditions``):
+    compared in place of a missing metadata line, named by ``where``.
+
+    >>> [c["where"] for c in contradictions({}, lab, {"temperature_c": ("25.0", "the column")})]
+    ['the column']
+    >>> contradictions({"temperature_c": "20.0"}, lab, {"temperature_c": ("25.0", "col")})
+    []
     """
     if not lab:
         return []
@@ -83,6 +92,9 @@ def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
     for what, section, key, md_keys, tol_key, unit in NUMBER_FIELDS:
         theirs = (lab.get(section) or {}).get(key)
         k, text = _first(metadata, md_keys)
+        where = None
+        if text is None and md_keys[0] in (measured or {}):
+            text, where = measured[md_keys[0]]
         ours = parse_number(text) if text is not None else None
         if theirs is None or ours is None or not math.isfinite(ours):
             continue
@@ -90,9 +102,9 @@ def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
         tol = rules.get(tol_key)
         tol = default if tol is None else float(tol)
         if abs(float(theirs) - ours) > tol:
-            out.append({"what": what, "key": k, "readings": f"{ours:g} {unit}",
+            out.append({"what": what, "key": k or md_keys[0], "readings": f"{ours:g} {unit}",
                         "lab": f"{float(theirs):g} {unit}", "lab_key": f"{section}.{key}",
-                        "tolerance": f"{tol:g} {unit}"})
+                        "tolerance": f"{tol:g} {unit}", **({"where": where} if where else {})})
     return out
 
 
@@ -134,7 +146,7 @@ def _message(c: dict) -> str:
     if c.get("message"):
         return c["message"]
     tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
-    where = c["key"] if "by" in c else f"# {c['key']}"
+    where = c.get("where") or (c["key"] if "by" in c else f"# {c['key']}")
     return (f"{c['what']}: {c.get('by', 'the readings say')} {c['readings']} ({where}), "
             f"{c.get('of', 'the laboratory file')} {c['lab']} ({c['lab_key']}){tol}")
 
@@ -220,7 +232,7 @@ def unstated_identity(named: dict, known) -> list[dict]:
 
 
 def check_identity(readings, lab: dict | None, *, lab_file=None,
-                   record: dict | None = None, named=()) -> list[Finding]:
+                   record: dict | None = None, named=(), measured=None) -> list[Finding]:
     """Compare the readings' identity and conditions with ``lab`` (module docstring), and,
     with ``record`` (``calibrate --record``: the registered instrument's texts, see
     :func:`record_contradictions`), the readings and the laboratory file with the records;
@@ -228,9 +240,12 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
     paths; :func:`named_contradictions`) with the readings, the laboratory file and the
     record: no contradiction gives ``[]``; one refuses (GonioError naming the readings and
     the key) unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged
-    findings are returned for the result."""
+    findings are returned for the result. ``measured(readings)``: what the readings measured
+    of their conditions, compared where their metadata are silent (a specification's
+    ``measured_conditions``; :func:`contradictions`)."""
     md = readings_metadata(readings) if lab or record or named else {}
-    found = contradictions(md, lab) + record_contradictions(md, lab, record)
+    seen = measured(readings) if measured is not None and lab else None
+    found = contradictions(md, lab, seen) + record_contradictions(md, lab, record)
     found += named_contradictions(md, {Path(p).name: readings_metadata(p) for p in named},
                                   lab, record, Path(readings).name)
     if not found:

@@ -255,6 +255,12 @@ class Specification:
         ``write(result, out, *, truth, lab, lang, dcc)`` → {name: path},
         ``results_json(result)``, ``summary(result, lab)``; optionally ``demo(...)`` and
         ``warnings(result)``.
+    measured_conditions : callable or None
+        ``measured_conditions(readings_path)`` → ``{"temperature_c": (text, where)}``: the
+        conditions the readings measured (a rate file's logged room temperature,
+        :func:`gonio.formats.rate_readings.room_temperature_measured`), compared with the
+        laboratory file where the readings' metadata are silent
+        (:func:`gonio.pipeline.identity.check_identity`); None: nothing measured.
     simulate_options, calibrate_options, budget_options, serve_options : frozenset
         The keywords the hooks ``simulate``, ``calibrate``, ``budget`` and ``serve`` (``gonio
         bench serve``) take beyond the common ones (``protocol`` and ``dcc`` among them where they apply); any other is
@@ -356,6 +362,7 @@ class Specification:
     readings_columns: Callable[[], tuple] | None = None
     named_inputs: Callable[..., list] | None = None
     read_table_calibration: Callable[..., Any] | None = None
+    measured_conditions: Callable[..., dict] | None = None
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()

@@ -37,6 +37,7 @@ def rate_specification(package: str, **fields):
         outputs=ITEM_RENDERER, default_bench="mems-adxrs610",
         certificate_content=f"{package}.certificate",
         readings_columns=lazy("gonio.formats.rate_readings:read_columns"),
+        measured_conditions=lazy("gonio.formats.rate_readings:room_temperature_measured"),
         calibrate_options=frozenset({"protocol", "dcc"}),
         arguments={"validate": "gonio.specs._rate_family:add_validate_options"}, **fields)
 
