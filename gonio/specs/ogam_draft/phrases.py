@@ -196,6 +196,14 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "倾斜原位估计测得 ψ = {1}°（U95 {2}°，区间 [{3}, {4}]°），超出所声明的倾斜限值 {5}°"
      "（tilt_bound_deg，附录A.1）：安装不满足该限值；K 和 E 仍按实测倾斜修正，原按限值计算的"
      "各不确定度分量改按 ψ + U95 = {6}° 计算"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): readings at lines (.+?) judged only against one another: "
+     r"7\.4 does not read each of these stops at this rate and axis in (\d+) or more series, "
+     r"so no repeated reference says what each position reads; the rule can single "
+     r"out one departing reading, two or more hide one another and would be read as "
+     r"nonlinearity \(K_l\) and in E",
+     "{1}，{2} °/s，{3}轴：第 {4} 行的读数仅相互比较：7.4 未在该角速率和轴向上对这些位置各读 {5} "
+     "组及以上，没有重复测量的参考说明各位置的读数；该规则只能识别一个偏离的读数，"
+     "两个及以上会相互掩盖，并被当作非线性度（K_l）并计入 E"),
     (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
     (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading; the "

@@ -38,7 +38,11 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
     (:func:`repeated_reference_scale`, ν ≈ 108): a position's repeated error
     (nonlinearity, table) cancels in d, a one-reading typo does not, and c falls from
     ≈ 19 to ≈ 3.8; such a 7.1 reading is set aside and K rests on the other rounds
-    (``ROUND_MAY_GO``);
+    (``ROUND_MAY_GO``); where 7.4 is read in fewer than ``PER_ROUND_MIN`` series (no such
+    prior) 7.1's readings, which then hide one another from the line rule when two or more
+    depart, are judged together against 7.4's rounds at the same stops read in at least
+    ``AGREEMENT_SERIES_MIN`` series (an F test; refused naming them), or named in a flagged
+    ``readings-not-judged`` finding where no such rounds exist (:func:`reference_agreement`);
   * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
@@ -80,6 +84,7 @@ import math
 
 import numpy as np
 import pandas as pd
+from scipy.stats import f as fisher_f
 from scipy.stats import t as student_t
 
 from gonio.errors import GonioError
@@ -716,19 +721,26 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
     for (key, g), how in zip(groups, rule):
         what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
         step = _resolution_arcsec(g, k_ref, deg_step)
+        it = getattr(protocol, "angle_deviation", None)
+        same = (it is not None and key[0] != "angle_deviation"
+                and math.isclose(float(key[1]), float(it.rate_dps))
+                and key[2] == it.orientation)
         if how == "round":
             # many series: each reading against the other series of its round (an error
             # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
-            out += _round_outliers(g, key[0], what, file, k_ref, step)
+            found = _round_outliers(g, key[0], what, file, k_ref, step)
         elif how == "line":
-            it = getattr(protocol, "angle_deviation", None)
-            same = (it is not None and key[0] != "angle_deviation"
-                    and math.isclose(float(key[1]), float(it.rate_dps))
-                    and key[2] == it.orientation)
-            out += _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha,
-                                  same)
+            found = _line_outliers(g, key[0], what, file, k_ref, step, ref, drift_rate, alpha,
+                                   same)
         else:
-            out += _group_outliers(g, key[0], what, file, k_ref)
+            found = _group_outliers(g, key[0], what, file, k_ref)
+        out += found
+        if key[0] in ROUND_MAY_GO and how == "line":
+            ref74 = rot[(rot["test"] == "angle_deviation") & same
+                        & np.isclose(rot["rate_dps"].to_numpy(float), float(key[1]))
+                        & (rot["orientation"] == key[2])]
+            out += reference_agreement(g, ref74, it, what, file, step, alpha,
+                                       {f.line for f in found})
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         what = f"zero_stability series {int(se)}"
         if len(g) < ZS_NEIGHBOUR_MIN:
@@ -737,6 +749,107 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             out += _rest_outliers(g, what, file, k_ref, _resolution_arcsec(g, k_ref, deg_step),
                                   drift_rate)
     return out
+
+
+#: The fewest 7.4 series at 7.1's stops that :func:`reference_agreement` judges 7.1 against
+#: (two readings of a stop give its repetition one degree of freedom).
+AGREEMENT_SERIES_MIN: int = 2
+
+
+def reference_agreement(g: pd.DataFrame, ref: pd.DataFrame, it, what: str, file,
+                        step: float, alpha: float, gone: set) -> list[Finding]:
+    """7.1 judged by the condition rule (at least ``LINE_MIN`` readings) where 7.4 is read in
+    fewer than ``PER_ROUND_MIN`` series (no repeated-reference prior,
+    :func:`repeated_reference_scale`): its readings all judged at once against the
+    7.4 readings of the same stops, or a finding naming the readings judged only against
+    one another.
+
+    Why. Without the prior, 7.1's six readings are judged against each other's line
+    (:func:`line_departures`, ν = 3, c ≈ 19): one departing reading is found, but two or
+    more each widen the line of the others and hide one another (2″ at 60° and 180° on the
+    RLG: no finding, K_l 0.00098 % and E 2.6″ certified where the clean file gives
+    ≤ 0.00033 % and 0.2″), and once ``LINE_MIN`` − 1 are left the rest are not judged at all.
+
+    The rule. ``ref`` holds the 7.4 readings at 7.1's rate and axis (empty where 7.4 is
+    at another); every 7.1 stop must be a 7.4 round (within its position tolerance) read in
+    at least ``AGREEMENT_SERIES_MIN`` series. Then d = r − the round's mean cancels what a
+    position repeats (table error, nonlinearity; :func:`repeated_reference_scale`), and the
+    7.1 readings the condition rule kept, less their least-squares line in θ (a K change or
+    drift between the two tests), have residual variance s² = RSS / (m − 2); under no typo it
+    estimates σ_d² = s_rep² (1 + 1/n) (n the fewest readings of a round, s_rep from 7.4's
+    repetitions with ν₀ = N − R), so F = s² / σ_d² follows Fisher's F(m − 2, ν₀) (never
+    below one step of resolution: σ_d² ≥ step² / 6, two readings' quantisation). F beyond
+    its 1 − ``alpha`` quantile refuses the calibration naming the readings, largest
+    departure first: several departing readings that the line rule cannot single out, and
+    that do not hide one another here (each adds to s²). A typo pattern on a line in θ
+    passes as a change of K between the tests. Where no such reference exists (7.4 in one
+    series, at other stops, rate or axis), a flagged finding names the readings judged
+    only against one another (docs/draft-readings.md, "7.1 without a repeated reference").
+    """
+    if it is None or not len(g):
+        return []
+    keep = g[~g["line"].isin(gone)]
+    x = keep["table_deg"].to_numpy(float)
+    per = ref.groupby("round", sort=True) if len(ref) else None
+    ang = per["table_deg"].median().to_numpy(float) if per is not None else np.array([])
+    cnt = per.size().to_numpy() if per is not None else np.array([], int)
+    j = (np.abs(x[:, None] - ang[None, :]).argmin(axis=1) if ang.size
+         else np.zeros(x.size, int))
+    ok = (ang.size > 0 and x.size >= 3 and bool(np.all(np.abs(ang[j] - x)
+                                                       <= it.position_tolerance_deg))
+          and bool(np.all(cnt[j] >= AGREEMENT_SERIES_MIN)))
+    if ok and int(cnt.min()) >= PER_ROUND_MIN:
+        return []                 # the repeated-reference prior judged them (line_departures)
+    lines = keep["line"].astype(int).tolist()
+    if not ok:
+        return [Finding(
+            "readings-not-judged",
+            f"{what}: readings at lines {', '.join(map(str, lines))} judged only against one "
+            f"another: 7.4 does not read each of these stops at this rate and axis in "
+            f"{AGREEMENT_SERIES_MIN} or more series, so no repeated reference says what each "
+            f"position reads; the rule can single out one departing reading, two or more "
+            f"hide one another and would be read as nonlinearity (K_l) and in E", "flagged",
+            file=file, line=lines[0] if lines else None, column="gyro_counts",
+            test="scale_factor", clause=CLAUSES["scale_factor"], rule=_AGREEMENT_RULE)]
+    s_rep, nu0, n_min = repeated_reference_scale(ref, step)
+    mean = per["_r"].mean().to_numpy(float)
+    d = keep["_r"].to_numpy(float) - mean[j]
+    X = _design(x, False)
+    coef, *_ = np.linalg.lstsq(X, d, rcond=None)
+    e = d - X @ coef
+    dof = x.size - X.shape[1]
+    var0 = max(s_rep * s_rep * (1.0 + 1.0 / max(n_min, 1)), step * step / 6.0)
+    if nu0 < 1 or var0 <= 0.0:
+        return []
+    ratio = float(e @ e) / dof / var0
+    crit = float(fisher_f.isf(alpha, dof, nu0))
+    if not ratio > crit:
+        return []
+    # named by each reading's departure from 7.4 at its stop (the line's residuals spread a
+    # typo over its clean neighbours; a median of d is a typo where half the readings are)
+    dd = d
+    order = np.argsort(-np.abs(dd), kind="stable")
+    worst = ", ".join(f"{lines[i]} ({dd[i]:+.3g}″)" for i in order)
+    # the lines first: a long refusal is cut on the command line's one line
+    return [Finding(
+        "readings-disagree-with-reference",
+        f"{what}: the readings disagree with 7.4's repetitions of the same stops, more than "
+        f"one departing (they hide one another from the condition rule): lines {worst} "
+        f"(departure from 7.4's mean at the stop, largest first); the "
+        f"calibration is refused (check these readings); scatter "
+        f"{math.sqrt(float(e @ e) / dof):.3g}″ about their line where 7.4 allows "
+        f"{math.sqrt(var0):.3g}″ (F = {ratio:.3g} > {crit:.3g}, ν = {dof}, {nu0})",
+        "refused", file=file, line=lines[int(order[0])],
+        column=str(keep["_col"].iloc[int(order[0])]), test="scale_factor",
+        clause=CLAUSES["scale_factor"], rule=_AGREEMENT_RULE)]
+
+
+_AGREEMENT_RULE = (
+    "7.1 with 7.4 in fewer than 5 series: d = r − the 7.4 round's mean at the same stop "
+    f"(7.4 read in at least {AGREEMENT_SERIES_MIN} series there), F = Σ (d − its least-squares "
+    "line in θ)² / (m − 2) / (s_rep² (1 + 1/n)) against F(m − 2, N − R) at "
+    "α (the group's share of the session's 2 %); without such a reference the readings are "
+    "named as judged only against one another")
 
 
 #: A 7.3 series of at least this many readings is screened against each reading's neighbours.
