@@ -33,6 +33,7 @@ from gonio.specs.ogam_draft.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
 from gonio.physics.kinematics import Timeline
 from gonio.specs.ogam_draft.protocol import Protocol
+from gonio.specs.ogam_draft.table_calibration import position_key
 from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, dps_to_arcsec_s
 
@@ -592,8 +593,7 @@ def table_error_coefficients(theta_deg: float, stops_deg) -> dict:
     out: dict = {}
 
     def add(pos: float, c: float) -> None:
-        key = round(float(pos) % 360.0, 6)
-        key = 0.0 if key == 360.0 else key
+        key = position_key(pos)
         out[key] = out.get(key, 0.0) + c
 
     add(theta, 1.0)

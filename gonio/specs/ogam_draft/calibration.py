@@ -1643,13 +1643,6 @@ def e_table_rule(point_listed: bool, sees_point: bool, through_k: bool,
             "k": None if not through_k else ("corrected" if k_corrected else "mpe")}
 
 
-def _position_key(x_deg: float) -> float:
-    """A table position, ° modulo 360 rounded to 1e-6° (360° is 0°), as
-    :func:`~gonio.specs.ogam_draft.budget_extra.table_error_coefficients` keys it."""
-    key = round(float(x_deg) % 360.0, 6)
-    return 0.0 if key == 360.0 else key
-
-
 def _e_k_part_coefficients(theta_deg: float, stops_deg) -> dict:
     """E_i's sensitivities to the table's errors at the 7.1 stops and common zero through
     K alone ({position: c}): :func:`~gonio.specs.ogam_draft.budget_extra.table_error_coefficients`
@@ -1658,7 +1651,7 @@ def _e_k_part_coefficients(theta_deg: float, stops_deg) -> dict:
 
     c = dict(table_error_coefficients(theta_deg, stops_deg))
     for pos, own in ((theta_deg, 1.0), (0.0, -1.0)):
-        k = _position_key(pos)
+        k = tcal.position_key(pos)
         c[k] = c.get(k, 0.0) - own
     return {p: v for p, v in c.items() if abs(v) > 1e-15}
 
@@ -1709,7 +1702,7 @@ def _e_point_table(calibration, p_deg, z_deg, theta_deg, through_k, c_k, k_new, 
     kept: dict = {}
     if not rule["own"]:
         for pos, c in ((p_deg, 1.0), (z_deg, -1.0)):
-            kept[_position_key(pos)] = kept.get(_position_key(pos), 0.0) + c
+            kept[tcal.position_key(pos)] = kept.get(tcal.position_key(pos), 0.0) + c
     if rule["k"] == "corrected":
         c_cal = c_cal - ARCSEC_PER_DEG * theta_deg / k_new * c_k
     elif rule["k"] == "mpe":

@@ -445,8 +445,7 @@ def scale_factor_table_coefficients(theta_deg, stop_deg=None, zero_deg=None) -> 
     out: dict = {}
 
     def add(pos: float, c: float) -> None:
-        key = round(float(pos) % 360.0, 6)
-        key = 0.0 if key == 360.0 else key
+        key = tcal.position_key(pos)
         out[key] = out.get(key, 0.0) + c
 
     for t, s, z in zip(th, stop, zero):
@@ -1268,11 +1267,7 @@ def range_table_positions(theta_deg, stop_deg=None, zero_deg=None):
     th = np.asarray(theta_deg, dtype=float)
     stop = th if stop_deg is None else np.asarray(stop_deg, dtype=float)
     zero = np.zeros_like(th) if zero_deg is None else np.asarray(zero_deg, dtype=float)
-
-    def key(x: float) -> float:
-        k = round(float(x) % 360.0, 6)
-        return 0.0 if k == 360.0 else k
-
+    key = tcal.position_key
     pos = sorted({key(x) for x in np.concatenate([stop, zero])})
     col = {p: j for j, p in enumerate(pos)}
     m = np.zeros((th.size, len(pos)))

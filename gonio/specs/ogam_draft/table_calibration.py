@@ -33,7 +33,7 @@ from gonio.errors import GonioError
 __all__ = ["TableCalibration", "read_table_calibration", "from_equal_division",
            "turned_error_arcsec", "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG",
            "MIN_DRAW_DOF", "draw_dof_refusal", "screen_against_mpe", "MPE_SCREEN_K",
-           "U_FLOOR_OF_MPE"]
+           "U_FLOOR_OF_MPE", "position_key"]
 
 REQUIRED_COLUMNS = ("table_deg", "error_arcsec", "u_arcsec")
 #: A session's position matches a calibrated one within this (degrees, modulo 360°).
@@ -48,6 +48,19 @@ def _wrap_deg(x_deg):
     """
     w = np.mod(np.asarray(x_deg, dtype=float), 360.0)
     return np.where(360.0 - w < POSITION_TOLERANCE_DEG, 0.0, w)
+
+
+def position_key(x_deg: float) -> float:
+    """A table position as the budgets key their sensitivities to the table's errors
+    ({position: c}): degrees modulo 360 rounded to 1e-6° (:data:`POSITION_TOLERANCE_DEG`),
+    360° (and what rounds to it) being 0°, so that one position reached as θ, θ + 360° or
+    −(360° − θ) adds to one coefficient (the table has one error there).
+
+    >>> position_key(360.0), position_key(-60.0), position_key(359.9999999), position_key(120)
+    (0.0, 300.0, 0.0, 120.0)
+    """
+    key = round(float(x_deg) % 360.0, 6)
+    return 0.0 if key == 360.0 else key
 
 
 @dataclass(frozen=True)
