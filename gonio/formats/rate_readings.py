@@ -424,7 +424,7 @@ def room_temperature_measured(path) -> dict:
 
     >>> import tempfile, os
     >>> d = tempfile.mkdtemp(); f = os.path.join(d, "r.csv")
-    >>> _ = open(f, "w").write("# spec: jjf1535-2015\ntest,run,step,role,time_s,output,"
+    >>> _ = open(f, "w").write("# serial: A-1\ntest,run,step,role,time_s,output,"
     ...     "temperature_c\nbias,0,0,record,0,1,20.0\nbias,0,0,record,1,1,\n"
     ...     "bias_temperature,0,0,record,2,1,85\nbias,0,0,record,3,1,20.4\n")
     >>> room_temperature_measured(f)["temperature_c"][0]
