@@ -7,6 +7,8 @@ Input quantities (:mod:`uncertainty.quantities`, :mod:`uncertainty.distributions
     :func:`type_b`            Type B from a half-width and a distribution (JCGM 100 4.3)
     :func:`type_a`            Type A from readings: mean, s or s/√n, ν = n − 1 (JCGM 100 4.2)
     :func:`from_u`            a quantity given by x, u(x), ν
+    :func:`reliability_dof`   ν of a u judged reliable to Δu/u (JCGM 100 G.4.2, eq. G.3);
+                              :data:`DOF_U_WITHIN_10PCT` = 50
     :data:`DISTRIBUTIONS`     the one name → distribution mapping (normal, rectangular,
                               triangular, arcsine, trapezoidal, rectangular-product,
                               rectangular-shifted-product)
@@ -55,12 +57,14 @@ from uncertainty.montecarlo import (MonteCarloResult, ValidationResult, adaptive
 from uncertainty.propagation import (Contribution, GumResult, coverage_factor,
                                      combined_uncertainty, compile_model, propagate,
                                      sensitivity_coefficients, welch_satterthwaite)
-from uncertainty.quantities import InputQuantity, from_u, type_a, type_b
+from uncertainty.quantities import (DOF_U_WITHIN_10PCT, InputQuantity, from_u, reliability_dof,
+                                    type_a, type_b)
 from uncertainty.table import (COLUMNS, budget_table, render_html, render_markdown,
                                render_text)
 
 __all__ = [
     "DISTRIBUTIONS", "distribution", "InputQuantity", "type_a", "type_b", "from_u",
+    "reliability_dof", "DOF_U_WITHIN_10PCT",
     "Contribution", "GumResult", "propagate", "sensitivity_coefficients", "combined_uncertainty",
     "welch_satterthwaite", "coverage_factor", "compile_model",
     "MonteCarloResult", "ValidationResult", "monte_carlo", "adaptive_monte_carlo",

@@ -157,6 +157,25 @@ def type_a(symbol: str, data, *, of_mean: bool = True, source: str = "") -> Inpu
                          _dist=None)
 
 
+def reliability_dof(relative_uncertainty_of_u: float) -> float:
+    """The degrees of freedom of a standard uncertainty judged reliable to
+    ``relative_uncertainty_of_u`` = Δu/u: JCGM 100 G.4.2 eq. (G.3), ν ≈ ½ (Δu/u)⁻². The
+    one reading of a line whose ν no sample gives (a drift model's u, a noise level
+    carried from a fit): "u is good to 10 %" is ν = 50.
+
+    >>> reliability_dof(0.10), reliability_dof(0.25)
+    (50.0, 8.0)
+    """
+    r = float(relative_uncertainty_of_u)
+    if not r > 0:
+        raise ValueError(f"the relative uncertainty of u must be > 0, got {r}")
+    return 0.5 / r / r
+
+
+#: ν of a line whose u is judged reliable to 10 % (:func:`reliability_dof`): 50.
+DOF_U_WITHIN_10PCT = reliability_dof(0.10)
+
+
 def from_u(symbol: str, value: float, u: float, *, dof: float = math.inf, type: str = "A",
            source: str = "") -> InputQuantity:
     """An input quantity given directly by x, u(x) and ν (e.g. a stated repeatability).

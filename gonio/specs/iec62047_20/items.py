@@ -30,7 +30,7 @@ from gonio.specs._rate_family.rate_records import (RateContext, static_output, s
                                                    segment_means, segment_samples)
 from gonio.units import S_PER_H
 from gonio.specs.iec62047_20.keys import ITEM_ROWS
-from uncertainty import from_u, type_b, welch_satterthwaite
+from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b, welch_satterthwaite
 
 
 @dataclass(kw_only=True)
@@ -307,7 +307,7 @@ def linearity(ctx: Context) -> Item:
 
     def terms(j, v0):       # the budget of point j's L_j (in %) about v0
         out = [from_u("L", v0, 0.0),
-               from_u("noise", 0.0, float(sd[j]), dof=50,
+               from_u("noise", 0.0, float(sd[j]), dof=DOF_U_WITHIN_10PCT,
                       source="pooled noise of the point means through the line's residual / "
                              "FullScale")]
         if u_dr is not None:
@@ -706,7 +706,7 @@ def cross_axis(ctx: Context) -> Item:
 
     def point(name):        # the signed K of one axis in % with its budget
         return gum(lambda k, al: 100 * (k + al),
-                   [from_u("K_" + name, per[name]["plus_minus"], us[name], dof=50,
+                   [from_u("K_" + name, per[name]["plus_minus"], us[name], dof=DOF_U_WITHIN_10PCT,
                            source="noise of the rotating means"),
                     type_b("align", 0.0, align, "rectangular",
                            source="alignment of the input axis to the plane perpendicular to "
@@ -883,7 +883,7 @@ def bias_tc_budget(pts, drift_u, deviation_bound_c: float, fluctuation_c: float,
     return gum(lambda s, d, dv, fl, ps: s + d + dv + fl + ps, [
         from_u("slope", slope, math.sqrt(float(parts @ parts)),
                dof=_ws(parts, [p[3] for p in pts]), source="noise of the visits' bias means"),
-        from_u("drift", 0.0, u_drift, dof=50,
+        from_u("drift", 0.0, u_drift, dof=DOF_U_WITHIN_10PCT,
                source="bias drift over the session (Allan fit: RRW, BI), variogram form"),
         from_u("dT_set", 0.0, u_dev, type="B",
                source="chamber deviation at each set point (rectangular, shared by its visits)"),
@@ -961,8 +961,8 @@ def arw(ctx: Context) -> Item:
     value, val, ratio, u_rel, mask = arw_reading(allan, shaped)
     midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     u = gum(lambda n, c: n * (1 + c),
-            [from_u("N", value, value * u_rel, dof=50, source="χ² intervals of the fit points"),
-             from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=50,
+            [from_u("N", value, value * u_rel, dof=DOF_U_WITHIN_10PCT, source="χ² intervals of the fit points"),
+             from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=DOF_U_WITHIN_10PCT,
                     source="bias correction of the −½ line under the fitted model with "
                            "band-limited flicker (half the correction)")])
     return Item("arw", t, cl, un, value, uncertainty=u, details={
@@ -1272,7 +1272,7 @@ def frequency_band(ctx: Context) -> Item:
     half_interp = band * h / abs(dp) * interpolation_remainder(
         np.log(f), ph if band == f90 else db, j) if dp != 0 else 0.0
     u = gum(lambda b, n, i: b + n + i,
-            [from_u("f", band, 0.0), from_u("noise", 0.0, u_f, dof=50,
+            [from_u("f", band, 0.0), from_u("noise", 0.0, u_f, dof=DOF_U_WITHIN_10PCT,
                                             source="phase/gain noise of the bracketing points"),
              type_b("interp", 0.0, half_interp, "rectangular",
                     source="linear interpolation in ln f: h²/8·|p''| from the neighbouring "
@@ -1838,7 +1838,7 @@ def startup_time(ctx: Context) -> Item:
     u = gum(lambda a, b, c, d: a + b + c - d,
             [from_u("t", float(count.mean()), 0.0),
              type_b("step", 0.0, step / 2, "rectangular", source="smoothing step"),
-             from_u("count", 0.0, float(np.sqrt(np.mean(np.square(us)) / v.size)), dof=50,
+             from_u("count", 0.0, float(np.sqrt(np.mean(np.square(us)) / v.size)), dof=DOF_U_WITHIN_10PCT,
                     source="time outside the band: the count's spread and the reference's "
                            "error (noise, bias drift) through the local slope"),
              type_b("curvature", c_mean, c_mean, "rectangular",
@@ -2273,7 +2273,7 @@ def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
     pu, pd_ = (pts[i] for i in visits(Tm))
     inputs = [from_u("B_up", pu[1], pu[2], dof=pu[3], source=f"rising visit at {Tm:g} °C"),
               from_u("B_down", pd_[1], pd_[2], dof=pd_[3], source=f"falling visit at {Tm:g} °C"),
-              from_u("drift", 0.0, drift_u(pu[4] - pd_[4]), dof=50,
+              from_u("drift", 0.0, drift_u(pu[4] - pd_[4]), dof=DOF_U_WITHIN_10PCT,
                      source="bias drift between the visits (Allan fit: RRW, BI)")]
     # the value is a maximum over the temperatures visited twice: noise inflates it
     sds = hysteresis_sds(pts, drift_u)
@@ -2324,9 +2324,9 @@ def bias_ratiometric(ctx: Context) -> Item:
 
     def inputs(i):
         u_dr = drift_u_dps(ctx, t_rest[i] - t_rest[ib]) * abs(ctx.a_base)      # output units
-        return [from_u("a_Vi", a[i], ua[i], dof=50, source=f"rest output at {V[i]:g} V"),
-                from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V"),
-                from_u("drift", 0.0, u_dr, dof=50,
+        return [from_u("a_Vi", a[i], ua[i], dof=DOF_U_WITHIN_10PCT, source=f"rest output at {V[i]:g} V"),
+                from_u("a_Vb", a[ib], ua[ib], dof=DOF_U_WITHIN_10PCT, source=f"rest output at {V[ib]:g} V"),
+                from_u("drift", 0.0, u_dr, dof=DOF_U_WITHIN_10PCT,
                        source="bias drift between the two rest points (Allan fit: RRW, BI)")]
 
     def model(i):
@@ -2406,7 +2406,7 @@ def g_sensitivity(ctx: Context) -> Item:
         s_, se_, dof_, u_dr_ = res[name]
         return gum(lambda s, d, e: (s + d) * (1 + e),
                    [from_u("slope", s_, se_, dof=dof_, source=f"least-squares slope ({name})"),
-                    from_u("drift", 0.0, u_dr_, dof=50,
+                    from_u("drift", 0.0, u_dr_, dof=DOF_U_WITHIN_10PCT,
                            source="bias drift over the turn projected on the regressor, "
                                   "u_drift(duration)·√(2/n)"),
                     from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B",
@@ -2429,7 +2429,8 @@ def broadband_noise(ctx: Context) -> Item:
     Nyquist frequency); the "20 dB/dec value" c of an amplitude density c/f (°/s^1.5) and the
     free slope in the details.
 
-    Uncertainty: the Welch estimate (ν ≈ 2 × segments × lines, Gaussian approximation)."""
+    Uncertainty: the Welch estimate (Gaussian approximation; its ν taken as segments ×
+    lines, half the χ² count 2 × segments × lines for the overlap and the window)."""
     t, cl, un = "broadband noise (rms)", "5.4.5.1 c)", "°/s"
     m = _miss(ctx, "static", "broadband_noise", t, cl, un) or _quiet(ctx, "broadband_noise", t, cl, un)
     if m:
@@ -2443,7 +2444,7 @@ def broadband_noise(ctx: Context) -> Item:
     nseg = max(1, 2 * x.size // nper - 1)
     u_rel = 1.0 / math.sqrt(nseg * d["lines"])
     u = gum(lambda r, e: r + e, [
-        from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=50,
+        from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=nseg * d["lines"],
                source="Welch estimate over the broadband lines"),
         _fluctuation_noise_line(ctx, x, dt, nper, nz["band_hz"], min(hi, 0.5 / dt),
                                 d["rms_dps"], include_lo=True)])

@@ -32,7 +32,7 @@ from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph,
                                                    segment_samples, sf_calibration_means)
 from gonio.units import S_PER_H
 from gonio.specs.jjf1535.keys import ITEM_ROWS
-from uncertainty import from_u, type_b
+from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b
 
 
 @dataclass(kw_only=True)
@@ -861,7 +861,7 @@ def g_sensitivity(ctx: Context) -> Item:
                          source="cross-axis coupling of the Earth rate (bound)"),
                   from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B",
                          source="scale factor, relative"),
-                  from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=50,
+                  from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=DOF_U_WITHIN_10PCT,
                          source="bias drift between the two positions (Allan fit: RRW, BI)")]
         return gum(lambda a, b, c, d, x, e, dr: (((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
                    inputs)
@@ -915,7 +915,7 @@ def angle_random_walk(ctx: Context) -> Item:
         for k, (pv, av) in (jf.allan_variances_jjf(rate_dph, ks) if ks else {}).items():
             printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
                                "ratio": pv / av if av > 0 else None}
-    u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
+    u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=DOF_U_WITHIN_10PCT,
                                               source="five-term AVAR fit with band-limited "
                                                      "flicker, u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
@@ -973,7 +973,7 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
             from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
             type_b("dT", T[j] - T[rt], _temperature_bound_c(ctx), "rectangular",
                    source=rg.TEMPERATURE_BOUND_SOURCE),
-            from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=50,
+            from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=DOF_U_WITHIN_10PCT,
                    source="bias drift between the two records (Allan fit: RRW, BI)")])
 
     # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
@@ -1058,7 +1058,7 @@ def bandwidth(ctx: Context) -> Item:
     u_f_noise = fb * u_db / slope if slope > 0 else 0.0
     half_interp = fb * h / abs(dp) * jf.interpolation_remainder(np.log(f), db, i) \
         if dp != 0 else 0.0
-    inputs = [from_u("f_-3dB", fb, u_f_noise, dof=50,
+    inputs = [from_u("f_-3dB", fb, u_f_noise, dof=DOF_U_WITHIN_10PCT,
                      source="noise of the bracketing gains (weighted by the interpolation) "
                             "and of the 0 dB gain"),
               type_b("interp", 0.0, half_interp, "rectangular",
