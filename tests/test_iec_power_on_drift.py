@@ -20,6 +20,19 @@ import pytest
 
 from gonio.analysis.coverage import clopper_pearson
 from gonio.specs.iec62047_20 import items as I
+from tests._helpers import power_on_record, transient_interval_means
+
+
+def _judge(recs, truth: float, n_ref: int, coef) -> tuple[float, bool]:
+    """One trial of :func:`power_on_drift_budget` on ``recs``: z = (value − truth)/u_c and
+    whether the statement (the replicates' 95 % interval, no k) holds the truth; checks the
+    reading is the largest contender at most, never below 0, inside its interval, the
+    interval's lower end at or above 0 and 1 ≤ m ≤ the records' smoothed values."""
+    val, vals, u, m = I.power_on_drift_budget(recs, n_ref, lambda sep: 0.0, coef)
+    assert max(vals) >= val >= 0.0 and 1 <= m <= sum(len(r[1]) for r in recs), (val, m)
+    lo, hi = u.interval
+    assert u.k is None and 0.0 <= lo <= val <= hi, (lo, val, hi)
+    return (val - truth) / u.u_c, bool(lo <= truth <= hi)
 
 
 def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float = 0.01,
@@ -32,7 +45,6 @@ def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float 
     n, P, nr, dt = 900, 10, 60, 0.1
     t = np.arange(n) * dt
     tr = a_dps * np.exp(-t / tau_s)
-    tt = t.reshape(-1, P).mean(1)
     truth = float(np.max(np.abs(tr.reshape(-1, P).mean(1) - tr[:nr].mean())))
     coef = (rrw_dps_sqrt_s ** 2, 0.0) if rrw_dps_sqrt_s else None
     z, hits = [], 0
@@ -40,14 +52,12 @@ def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float 
         recs = []
         for _r in range(2):
             walk = np.cumsum(rng.standard_normal(n)) * rrw_dps_sqrt_s * np.sqrt(dt)
-            y = 0.3 + tr + walk + sigma_dps * rng.standard_normal(n)
-            recs.append((tt, y.reshape(-1, P).mean(1), y))
-        val, vals, u, m = I.power_on_drift_budget(recs, nr, lambda sep: 0.0, coef)
-        assert max(vals) >= val >= 0.0 and 1 <= m <= 180
-        z.append((val - truth) / u.u_c)
-        lo, hi = u.interval              # the statement: the replicates' 95 % interval
-        assert u.k is None and 0.0 <= lo <= val <= hi
-        hits += lo <= truth <= hi
+            recs.append(power_on_record(t, 0.3 + tr + walk + sigma_dps * rng.standard_normal(n),
+                                        P))
+        assert sum(len(r[1]) for r in recs) == 180
+        zi, hit = _judge(recs, truth, nr, coef)
+        z.append(zi)
+        hits += hit
     return np.array(z), hits
 
 
@@ -102,13 +112,9 @@ def _bench_records(rng, gyro, n=900, dt=1.0, P=10):
     from gonio.bench.rate_gyro import NoiseState
 
     t = np.arange(n) * dt
-    tr = gyro.warmup_bias_dps * gyro.warmup_tau_s / dt * (
-        np.exp(-t / gyro.warmup_tau_s) - np.exp(-(t + dt) / gyro.warmup_tau_s))
-    tt = t.reshape(-1, P).mean(1)
-    recs = []
-    for _ in range(2):
-        y = 0.2 + tr + NoiseState(gyro, rng).samples(n, dt, 22.5)
-        recs.append((tt, y.reshape(-1, P).mean(1), y))
+    tr = transient_interval_means(gyro.warmup_bias_dps, gyro.warmup_tau_s, t, dt)
+    recs = [power_on_record(t, 0.2 + tr + NoiseState(gyro, rng).samples(n, dt, 22.5), P)
+            for _ in range(2)]
     return recs, tr
 
 
@@ -130,9 +136,9 @@ def test_power_on_drift_on_the_bench_noise_is_centred_and_covers():
         recs, tr = _bench_records(rng, g)
         blocks = tr.reshape(-1, 10).mean(1)
         truth = float(np.max(np.abs(blocks - tr[:60].mean())))
-        val, vals, u, m = I.power_on_drift_budget(recs, 60, lambda s: 0.0, coef)
-        z.append((val - truth) / u.u_c)
-        hits += u.interval[0] <= truth <= u.interval[1]
+        zi, hit = _judge(recs, truth, 60, coef)
+        z.append(zi)
+        hits += hit
     z = np.array(z)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.25 and 0.7 <= z.std() <= 1.3, (z.mean(), z.std())
@@ -161,11 +167,8 @@ def test_power_on_dof_for_white_noise_alone():
     Welch–Satterthwaite; the walk and flicker, absent, hold no share."""
     rng = np.random.default_rng(3)
     n, P = 900, 10
-    tt = np.arange(n).reshape(-1, P).mean(1)
-    recs = []
-    for _ in range(2):
-        y = 0.1 + 0.03 * rng.standard_normal(n)
-        recs.append((tt, y.reshape(-1, P).mean(1), y))
+    recs = [power_on_record(np.arange(n), 0.1 + 0.03 * rng.standard_normal(n), P)
+            for _ in range(2)]
     rep = I._power_on_replicates(recs, 60, lambda s: 0.0, None)
     g = -1.0 if not rep["r_hat"] > 0 else 0.0
     shares = I._power_on_shares(recs, 60, lambda s: 0.0, None, g,
@@ -182,13 +185,11 @@ def _unequal_records(rng, amps, n=2000, dt=1.0, P=10, tau_s=200.0, sigma_dps=0.0
     white noise, 1-s samples, smoothing 10; the truth, the largest over the records of the
     noise-free transient's |block − reference mean|, from the generator's parameters here."""
     t = np.arange(n) * dt
-    tt = t.reshape(-1, P).mean(1)
     recs, truths = [], []
     for a in amps:
         e = a * np.exp(-t / tau_s)
         truths.append(float(np.max(np.abs(e.reshape(-1, P).mean(1) - e[:100].mean()))))
-        y = e + sigma_dps * rng.standard_normal(n)
-        recs.append((tt, y.reshape(-1, P).mean(1), y))
+        recs.append(power_on_record(t, e + sigma_dps * rng.standard_normal(n), P))
     return recs, max(truths)
 
 
@@ -205,9 +206,9 @@ def test_power_on_records_of_unequal_transients_are_not_pooled():
         recs, truth = _unequal_records(rng, (0.2, 0.05, 0.05))
         rep = I._power_on_replicates(recs, 100, lambda s: 0.0, (0.0, 0.0), test=True)
         assert not I.power_on_one_transient(rep["lr"], rep["lr_star"])[0]
-        val, vals, u, m = I.power_on_drift_budget(recs, 100, lambda s: 0.0, (0.0, 0.0))
-        z.append((val - truth) / u.u_c)
-        hits += u.interval[0] <= truth <= u.interval[1]
+        zi, hit = _judge(recs, truth, 100, (0.0, 0.0))
+        z.append(zi)
+        hits += hit
     z = np.array(z)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.5 and 0.6 <= z.std() <= 1.4, (z.mean(), z.std())
