@@ -117,6 +117,22 @@ def test_a_typo_in_any_column_is_set_aside_by_line(simulated, column):
     assert "set aside" in r.to_json()["extra"]["screening"]
 
 
+def test_a_set_point_typo_in_a_segment_s_first_row_is_no_missing_point(simulated):
+    """The first row of a point written with another rate (100 -> 10 by a lost digit): that
+    row is set aside, and the point, which its other rows measured, is not called missing
+    (the completeness check read each segment's first row as its setting)."""
+    spec, proto, readings, tmp = simulated
+
+    def change(row):
+        row["rate_dps"] = repr(float(row["rate_dps"]) * 10)
+
+    bad = tmp / "typo-first-row.csv"
+    line = _edit(readings, bad, lambda row: _sf_point(row, spec), change)
+    r, found = _findings(spec, bad, proto)
+    assert any(f["line"] == line and f["action"] == "set_aside" for f in found), found
+    assert not [f for f in found if f["code"] == "programme-point-missing"], found
+
+
 def test_missing_programme_point_is_named_and_on_the_certificate(simulated):
     spec, proto, readings, tmp = simulated
     bad = tmp / "missing.csv"

@@ -537,15 +537,36 @@ def expected_from_plan(segments, skip=("vibration",)) -> dict:
     return out
 
 
+def segment_values(df: pd.DataFrame, cols) -> pd.DataFrame:
+    """One row per segment (``test``, ``run``, ``step``) with each of ``cols`` the value most
+    of the segment's rows give (the first of equally common ones): the segment's setting,
+    which a typo in one row does not change.
+
+    >>> d = pd.DataFrame({"test": ["sf"] * 4, "run": [0] * 4, "step": [0] * 4,
+    ...                   "rate_dps": [10.0, 100.0, 100.0, 100.0]})
+    >>> segment_values(d, ["rate_dps"])["rate_dps"].tolist()
+    [100.0]
+    """
+    keys = ["test", "run", "step"]
+    if not cols:
+        return df.groupby(keys, sort=False).first().reset_index()[keys]
+    return (df.groupby(keys, sort=False)[list(cols)]
+            .agg(lambda v: v.value_counts(sort=True, dropna=False).index[0])
+            .reset_index())
+
+
 def missing_points(df: pd.DataFrame, expected: dict, *, file=None,
                    clauses: dict | None = None) -> list[Finding]:
     """``expected``: {(test, run): [(what, value), …]} with ``what`` a column (``rate_dps``,
     ``temperature_c``, ``supply_v``, ``up_axis``, ``stand_deg``) and the value each planned
     segment of that run has; a value absent from the readings' segments is named. A run
-    absent altogether is named once."""
+    absent altogether is named once. A segment's value is the one most of its rows give
+    (:func:`segment_values`): one row's typo in the set-point column is that row's finding,
+    not a planned point missing."""
     out = []
     clauses = clauses or {}
-    seg = df.groupby(["test", "run", "step"], sort=False).first().reset_index()
+    cols = sorted({what for wants in expected.values() for what, _ in wants} & set(df.columns))
+    seg = segment_values(df, cols)
     for (test, run), wants in expected.items():
         have = seg[(seg["test"] == test) & (seg["run"] == run)]
         cl = clauses.get(test)
