@@ -82,6 +82,11 @@ class Chamber:
     #: Set (the coverage studies' worst-condition case): the deviation is + ``point_deviation_c``
     #: at every set point above this temperature and − ``point_deviation_c`` at or below it
     deviation_split_c: float | None = None
+    #: Set (the worst-condition case): the gyro's place in the volume follows the set point —
+    #: + |position_offset()| at every set point above this temperature, − at or below it
+    #: (JJF Table 2 bounds the uniformity at each set point; wall losses make the volume's
+    #: gradient grow with T − ambient, so the far corner is warmer when hot, cooler when cold)
+    position_split_c: float | None = None
 
     def position_offset(self) -> float:
         """The gyro's temperature offset from the chamber's (°C): ``position_offset_c``,
@@ -92,6 +97,23 @@ class Chamber:
         """
         return 0.5 * self.uniformity_c if self.position_offset_c is None \
             else float(self.position_offset_c)
+
+    def position_at(self, set_point_c: float) -> float:
+        """The gyro's temperature offset from the chamber's (°C) at ``set_point_c``: the one
+        place :meth:`position_offset`, or — with ``position_split_c`` set — its magnitude
+        with the sign of the set point's side of the split (the place's effect then moves
+        a slope over the set points, as a constant offset does not).
+
+        >>> Chamber(uniformity_c=2.0).position_at(-40.0)
+        1.0
+        >>> c = Chamber(uniformity_c=2.0, position_split_c=20.0)
+        >>> c.position_at(85.0), c.position_at(20.0), c.position_at(-40.0)
+        (1.0, -1.0, -1.0)
+        """
+        p = self.position_offset()
+        if self.position_split_c is None:
+            return p
+        return abs(p) if float(set_point_c) > self.position_split_c else -abs(p)
 
     def deviation_at(self, set_point_c: float) -> float:
         """The chamber's deviation from the set point ``set_point_c`` (°C).
@@ -163,7 +185,10 @@ class Equipment:
     acquisition: Acquisition = Acquisition()
     supply: Supply = Supply()
     fixture: Fixture = Fixture()
-    rate_table_u_rel: float = 2.5e-4     # standard uncertainty of the table rate (its certificate)
+    #: standard uncertainty of the table rate (its certificate); None: none stated — the
+    #: laboratory knows only JJF 1535 Table 2's 0.05 % bound (the readings then state no
+    #: ``rate_table_u_rel``, and the budgets read it as that bound, rectangular)
+    rate_table_u_rel: float | None = 2.5e-4
     acquisition_u_rel: float = 3.0e-5    # standard uncertainty of the voltmeter gain
     chamber_deviation_bound_c: float = 2.0   # chamber deviation, rectangular half-width
     axis_alignment_bound_deg: float = 0.05   # input axis in its fixture, rectangular half-width
@@ -208,7 +233,9 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     """``eq`` with every error that a budget carries as type B drawn, from ``seed``, from
     the distribution its certificate or stated bound gives:
 
-    - the rate table's relative rate error: normal, σ = ``rate_table_u_rel``;
+    - the rate table's relative rate error: normal, σ = ``rate_table_u_rel``; where none
+      is stated (None), uniform within JJF 1535 Table 2's ±0.05 % (the bound the budget
+      then carries, :func:`gonio.specs._rate_family.rate_records.rate_table_line`);
     - the voltmeter's relative gain error: normal, σ = ``acquisition_u_rel``;
     - the chamber's deviation, at each set point its own: uniform in
       ±``chamber_deviation_bound_c`` (Chamber.point_deviation_c, seeded per trial);
@@ -240,7 +267,8 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     True
     """
     rng = np.random.default_rng([int(seed), EQUIPMENT_STREAM])
-    rate_err = float(rng.normal(0.0, eq.rate_table_u_rel))
+    rate_err = float(rng.normal(0.0, eq.rate_table_u_rel)) if eq.rate_table_u_rel is not None \
+        else float(rng.uniform(-TABLE2_RATE_ACCURACY_REL, TABLE2_RATE_ACCURACY_REL))
     gain_err = float(rng.normal(0.0, eq.acquisition_u_rel))
     a = eq.axis_alignment_bound_deg
     mis_x, mis_y = (float(v) for v in rng.uniform(-a, a, 2)) if a > 0 else (0.0, 0.0)
@@ -264,6 +292,9 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
 #: (0.05 %, its once-per-revolution ripple), the chamber's fluctuation (±1 °C) and
 #: uniformity (2 °C).
 TABLE2_RATE_SMOOTHNESS_REL = 5.0e-4
+#: JJF 1535-2015 Table 2's rate accuracy (the same row's 0.05 %): the bound of the table's
+#: rate error where the bench states no certificate u (``rate_table_u_rel`` None).
+TABLE2_RATE_ACCURACY_REL = 5.0e-4
 TABLE2_CHAMBER_FLUCTUATION_C = 1.0
 TABLE2_CHAMBER_UNIFORMITY_C = 2.0
 #: The worst-condition rule (one rule for every study of the rate family, and the optical
@@ -276,9 +307,10 @@ TABLE2_CHAMBER_UNIFORMITY_C = 2.0
 #: bound — its certificate's U is a 95 % value of a state of knowledge, not a limit — and is
 #: drawn from that certificate per trial, as in ``typeb``.
 WORST_RULE = ("bounded effects (rectangular lines and the readings' stated amplitudes) at "
-              "their bounds with the worst sign, all at once; normal-certificate effects "
-              "(rate table's rate, voltmeter's gain) drawn from their certificates; phases "
-              "drawn")
+              "their bounds with the worst sign, all at once, the gyro's place in the volume "
+              "following the set point; the rate table's rate at Table 2's 0.05 % where no "
+              "certificate u is stated; normal-certificate effects (rate table's rate where "
+              "its u is stated, voltmeter's gain) drawn from their certificates; phases drawn")
 
 
 def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
@@ -292,6 +324,9 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
       :func:`draw_equipment` draws them from ``seed`` — a normal certificate's 2u is not a
       bound, and a k = 2 budget whose line is that certificate's u cannot cover a condition
       that fixes the line at 2u where it dominates (JJF K and B_0 covered 0.60–0.75 so);
+      but where the bench states NO certificate u (``rate_table_u_rel`` None: the laboratory
+      knows only Table 2's 0.05 %, a bound), the table's error sits AT that bound,
+      + :data:`TABLE2_RATE_ACCURACY_REL` (raising the indicated K);
     - the chamber's deviation at ± ``chamber_deviation_bound_c`` at every set point:
       + above ``temperature_split_c`` and − at or below it
       (:attr:`Chamber.deviation_split_c`), which stretches every temperature span that
@@ -300,8 +335,11 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
       magnitude; a set point visited twice keeps its deviation (hysteresis unaffected);
     - the chamber's fluctuation amplitude and uniformity at Table 2's ±1 °C and 2 °C where
       the bench states less (:data:`TABLE2_CHAMBER_FLUCTUATION_C`,
-      :data:`TABLE2_CHAMBER_UNIFORMITY_C`), the gyro at the volume's warm end (+ half the
-      uniformity, the same sign as the deviation above the split);
+      :data:`TABLE2_CHAMBER_UNIFORMITY_C`), the gyro's place in the volume at half the
+      uniformity with the deviation's sign at each set point (+ above the split, − at or
+      below: :attr:`Chamber.position_split_c`), so it stretches the spans as the deviation
+      does — Table 2 bounds the uniformity at each set point, and a place that follows the
+      set point moves a slope, which one constant offset cannot;
     - the table's once-per-revolution ripple at Table 2's 0.05 % where the bench states less
       (:data:`TABLE2_RATE_SMOOTHNESS_REL`);
     - the gyro's misalignment in its fixture at ± ``axis_alignment_bound_deg`` about body x
@@ -331,7 +369,8 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
     uni = max(eq.chamber.uniformity_c, TABLE2_CHAMBER_UNIFORMITY_C)
     return replace(
         eq, rate_table=replace(eq.rate_table,
-                               rate_error_rel=drawn.rate_table.rate_error_rel,
+                               rate_error_rel=drawn.rate_table.rate_error_rel
+                               if eq.rate_table_u_rel is not None else TABLE2_RATE_ACCURACY_REL,
                                ripple_rel=max(eq.rate_table.ripple_rel,
                                               TABLE2_RATE_SMOOTHNESS_REL),
                                ripple_phase_deg=drawn.rate_table.ripple_phase_deg),
@@ -341,6 +380,7 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
                         fluctuation_c=max(eq.chamber.fluctuation_c,
                                           TABLE2_CHAMBER_FLUCTUATION_C),
                         uniformity_c=uni, position_offset_c=0.5 * uni,
+                        position_split_c=float(temperature_split_c),
                         fluctuation_phase_deg=drawn.chamber.fluctuation_phase_deg),
         fixture=Fixture(-a if ky > 0 else a, -a if kx < 0 else a))
 

@@ -154,7 +154,7 @@ class RateSession:
         temp, _ = signal.lfilter([1 - a], [1, -a], np.broadcast_to(ch, (n,)).astype(float),
                                  zi=[a * st.temp])
         st.temp = float(temp[-1])
-        temp_g = temp + (0.0 if seg.temperature_c is None else eq.chamber.position_offset())
+        temp_g = temp + (0.0 if seg.temperature_c is None else eq.chamber.position_at(target))
         v_set = g.supply_nominal_v if seg.supply_v is None else float(seg.supply_v)
         v = v_set + eq.supply.error_v                       # actual terminal voltage
         K = g.scale_factor_at(temp_g, v) * st.k_run

@@ -20,7 +20,9 @@ def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -
     if lab and lab.get("standards"):
         return list(lab["standards"])
     return [{"name": md.get("table", not_stated), "identifier": "",
-             "accuracy": f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
+             "accuracy": (f"rate U_rel = {2 * float(md['rate_table_u_rel']):.2g} (k = 2)"
+                          if str(md.get("rate_table_u_rel", "") or "").strip() else
+                          "rate accuracy within 0.05 % (JJF 1535 Table 2; no certificate u stated)"),
              "certificate": "", "traceability": "none (virtual bench)" if lab is None else not_stated}]
 
 

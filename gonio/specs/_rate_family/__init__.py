@@ -56,11 +56,13 @@ STUDY_CASES = {
              "+2 C at every set point above the gyro's reference temperature and -2 C at or "
              "below it (every temperature span across it stretched); the chamber's "
              "fluctuation and uniformity and the table's ripple at Table 2's 1 C, 2 C and "
-             "0.05 % (the gyro at the volume's warm end); the fixture misalignment at "
-             "+-0.05 deg with the sign of the gyro's cross-axis sensitivity; the "
-             "normal-certificate effects (the table's rate error, the voltmeter's gain) and "
-             "the two phases drawn per trial as in typeb (a normal certificate's 2u is not a "
-             "bound)",
+             "0.05 %, the gyro's place in the volume at +-1 C with the deviation's sign at "
+             "each set point; the bench states no certificate u for its rate table, so the "
+             "readings carry none, the budgets take Table 2's 0.05 % as a rectangular bound "
+             "and the table's rate error sits at +0.05 %; the fixture misalignment at "
+             "+-0.05 deg with the sign of the gyro's cross-axis sensitivity; the voltmeter's "
+             "gain (a normal certificate: its 2u is not a bound) and the two phases drawn "
+             "per trial as in typeb",
 }
 
 

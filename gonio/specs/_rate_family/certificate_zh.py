@@ -13,6 +13,10 @@ COMMON_PHRASES_ZH = (
      _TB_ZH + " × 5.1.3.4 各次试验的 T_c,SF/a（无该试验时为 0）"),
     (_TB + r" × the bias temperature coefficient of 5\.3\.3\.6's visits \(0 without them\)",
      _TB_ZH + " × 5.3.3.6 各次测量的零偏温度系数（无该测量时为 0）"),
+    (r"the gyro's temperature error at the set points, any pattern within ± \(chamber "
+     r"deviation bound \+ half the uniformity\) \(the errors may follow the set point: the "
+     r"slope's bound \(δ \+ U/2\)·\|T_c\|·Σ\|T_i − T̄\|/Σ\(T_i − T̄\)²\)",
+     "各设定点处陀螺的温度误差，±（温箱温度偏差界限 + 均匀度之半）内任意组合（误差可能随设定点变化：斜率界限 (δ + U/2)·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²）"),
     (r"chamber deviation at the set points, any pattern within ± bound \(the deviations may "
      r"be correlated: the slope's bound δ·\|T_c\|·Σ\|T_i − T̄\|/Σ\(T_i − T̄\)²\)",
      "各设定点的温箱温度偏差，± 界限内任意组合（各点偏差可能相关：斜率界限 δ·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²）"),
@@ -25,6 +29,9 @@ COMMON_PHRASES_ZH = (
     (r"acquisition gain on the whole output \(null included\)", "整个输出（含零点）上的采集增益"),
     (r"acquisition, relative", "数据采集（相对）"),
     (r"rate table, relative", "速率转台（相对）"),
+    (r"(?:rate table|scale factor), relative(?: \(u1\))?: no certificate u stated; JJF 1535 "
+     r"Table 2's 0\.05 % as a rectangular bound",
+     "速率转台（相对）：未给出证书标准不确定度，按 JJF 1535 表2 的 0.05 % 作矩形分布界限"),
     (r"chamber deviation at T_BASE \(± bound\) × T_c,SF/a of 5\.1\.3\.4's runs "
      r"\(0 without them\)", "T_BASE 处温箱温度偏差（± 界限）× 5.1.3.4 各次试验的 T_c,SF/a（无该试验时为 0）"),
     (r"chamber deviation at T_BASE \(± bound\) × the bias temperature coefficient of "

@@ -40,7 +40,7 @@ class RateContext:
     null_output: float
     latitude_deg: float
     protocol: dict
-    rate_table_u_rel: float = 2.5e-4
+    rate_table_u_rel: float | None = None     # None: not stated (rate_table_line)
     acquisition_u_rel: float = 3.0e-5
     chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
     axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
@@ -69,6 +69,49 @@ def metadata_number(md: dict, key: str, default, path) -> float:
             raise GonioError("required metadata key is missing", file=path, key=key)
         return float(default)
     return value
+
+
+#: JJF 1535-2015 Table 2, row 1: the rate table's "rate accuracy and rate smoothness 0.05 %"
+#: (relative) — a bound the laboratory's table conforms to, not a certificate's U.
+TABLE2_RATE_ACCURACY_REL = 5.0e-4
+#: What the rate table's line adds to its source where the readings state no certificate u.
+TABLE2_RATE_SOURCE = ": no certificate u stated; JJF 1535 Table 2's 0.05 % as a rectangular bound"
+
+
+def stated_rate_table_u(md: dict, path) -> float | None:
+    """The rate table's relative standard uncertainty the readings state
+    (``rate_table_u_rel``, its certificate's u), or None where they state none (the
+    reading of that case: :func:`rate_table_line`)."""
+    if not str(md.get("rate_table_u_rel", "") or "").strip():
+        return None
+    return metadata_number(md, "rate_table_u_rel", None, path)
+
+
+def rate_table_line(symbol: str, u_stated: float | None, source: str):
+    """The budget line of the rate table's relative rate error (JJF 1535 Annex A u₁, IEC
+    62047-20's table term), one reading of what the laboratory knows of it:
+
+    - the readings state ``rate_table_u_rel`` (its calibration certificate's u): a normal
+      line of that u (the certificate's state of knowledge; the coverage studies draw the
+      error from it);
+    - they state none: all the laboratory can claim is the table's conformity to JJF 1535
+      Table 2's "rate accuracy and rate smoothness 0.05 %", a BOUND — one rectangular line
+      of half-width :data:`TABLE2_RATE_ACCURACY_REL` (u = 5·10⁻⁴/√3 = 2.89·10⁻⁴), which a
+      table at the limit does not pass (the coverage studies' worst case puts it there).
+      Before, such a file was budgeted as if a certificate stated u = 2.5·10⁻⁴, i.e. Table
+      2's 0.05 % read as U at k = 2.
+
+    >>> round(rate_table_line("e", None, "t").u, 7), rate_table_line("e", 2.5e-4, "t").u
+    (0.0002887, 0.00025)
+    >>> "Table 2" in rate_table_line("e", None, "rate table").source
+    True
+    """
+    from uncertainty import from_u, type_b
+
+    if u_stated is None:
+        return type_b(symbol, 0.0, TABLE2_RATE_ACCURACY_REL, "rectangular",
+                      source=f"{source}{TABLE2_RATE_SOURCE}")
+    return from_u(symbol, 0.0, float(u_stated), type="B", source=source)
 
 
 def protocol_named(rd: RateReadings, protocol, default: str):

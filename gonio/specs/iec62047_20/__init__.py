@@ -78,7 +78,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
     from gonio.result.model import Result, source_info
     from gonio.specs._rate_family.rate_records import (calibrate_items, load_readings,
-                                                       metadata_number, protocol_named)
+                                                       metadata_number, protocol_named,
+                                                       stated_rate_table_u)
     from gonio.specs._rate_family.screening import screened, screening_extra
     from gonio.specs.iec62047_20 import items as _items
     from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, t_base
@@ -102,7 +103,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         latitude_deg=metadata_number(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
         a_typ=metadata_number(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
         t_base_c=t_base(proto), v_base=metadata_number(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
-        rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        rate_table_u_rel=stated_rate_table_u(md, rd.path),
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
         chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path),
         chamber_fluctuation_c=metadata_number(md, "chamber_fluctuation_c", 1.0, rd.path),

@@ -27,7 +27,7 @@ from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.result.statement import K_SOURCE_SELECTED_MAX
 from gonio.specs._rate_family.rate_records import (RateContext, static_output, static_rate_dph,
-                                                   segment_means, segment_samples)
+                                                   segment_means, segment_samples, rate_table_line)
 from gonio.units import S_PER_H
 from gonio.specs.iec62047_20.keys import ITEM_ROWS
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b, welch_satterthwaite
@@ -203,7 +203,7 @@ def slope_noise_u(x: np.ndarray, u_y: np.ndarray) -> float:
 def _u_rel_sf(ctx: Context, c: dict) -> list:
     return [from_u("a", c["a"], c["u_a"], dof=c["nu_a"],
                    source="least-squares slope, from the noise of the point means"),
-            from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B", source="rate table, relative"),
+            rate_table_line("e_table", ctx.rate_table_u_rel, "rate table, relative"),
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
             type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx) * abs(sf_tc_rel(ctx)),
                    "rectangular", source=TEMPERATURE_BOUND_SOURCE + " × T_c,SF/a of 5.1.3.4's "
@@ -588,23 +588,28 @@ def sf_temperature(ctx: Context) -> Item:
     parts = [c["u_a"] * abs(Ti - T.mean()) / sxx for c, Ti in zip(runs, T)]
     u_slope = math.sqrt(sum(p ** 2 for p in parts))
     u_T_indep = ctx.chamber_deviation_c / math.sqrt(3) * abs(slope) / math.sqrt(sxx)
-    h_T = correlated_deviation_slope_bound(T, slope, ctx.chamber_deviation_c)
+    h_T = correlated_deviation_slope_bound(T, slope, gyro_temperature_bound_c(ctx))
     u = gum(lambda s, e, ab: 100 * (s + e) / ab,
             [from_u("T_c", slope, u_slope, dof=_ws(parts, [c["nu_a"] for c in runs]),
                     source="slope from the K_i's noise u(a_i)"),
-             type_b("dT", 0.0, h_T, "rectangular",
-                    source="chamber deviation at the set points, any pattern within ± bound "
-                           "(the deviations may be correlated: the slope's bound "
-                           "δ·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²)"),
+             type_b("dT", 0.0, h_T, "rectangular", source=SLOPE_TEMPERATURE_SOURCE),
              from_u("a_BASE", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"])])
     return Item("sf_temperature_coefficient", t, cl, un, 100 * slope / a[ib], uncertainty=u,
                 details={"T_c_SF": slope, "c": icpt, "temperatures_c": T, "K_i": a,
                          "S_F_VAR_pct": var,
                          "u_dT_independent": {
                              "u": u_T_indep,
-                             "basis": "the set points' deviations independent, each ± bound "
-                                      "rectangular (the budget before; not certified: Table 2 "
-                                      "bounds each deviation, not their correlation)"}})
+                             "basis": "the set points' chamber deviations independent, each "
+                                      "± bound rectangular, the place in the volume left out "
+                                      "(not certified: Table 2 bounds each deviation and the "
+                                      "uniformity, not their correlation)"}})
+
+
+#: The source of the temperature line of a slope over the set points (5.1.3.4, 5.3.3.6).
+SLOPE_TEMPERATURE_SOURCE = ("the gyro's temperature error at the set points, any pattern "
+                            "within ± (chamber deviation bound + half the uniformity) (the "
+                            "errors may follow the set point: the slope's bound "
+                            "(δ + U/2)·|T_c|·Σ|T_i − T̄|/Σ(T_i − T̄)²)")
 
 
 def correlated_deviation_slope_bound(T, slope: float, bound_c: float) -> float:
@@ -617,6 +622,12 @@ def correlated_deviation_slope_bound(T, slope: float, bound_c: float) -> float:
     d_i = bound·sign(T_i − T̄):
 
         h = bound·|slope|·Σ|T_i − T̄| / Σ(T_i − T̄)²
+
+    5.1.3.4 passes ``bound_c`` = :func:`gyro_temperature_bound_c` (the chamber's deviation
+    bound + half its uniformity, as a_BASE, the bias and JJF K_t do): the gyro's place in
+    the volume is bounded at each set point too, and it follows the set point for the
+    stronger physical reason (wall losses make the volume's gradient grow with T − ambient),
+    so both may take the sign pattern at once.
 
     The budget carries it as one rectangular line of half-width h (u = h/√3). With the set
     points' deviations independent the slope's u is bound·|slope|/(√3·√Σ(T_i − T̄)²) —
@@ -849,14 +860,17 @@ def bias_tc_budget(pts, drift_u, deviation_bound_c: float, fluctuation_c: float,
       :func:`visit_drift_u_dps`, the static record's Allan fit through the generalised
       covariance): with Σ w_i = 0 its variance is
       −½ Σ_ij w_i w_j D(|t_i − t_j|), exact for any such process (variogram form);
-    - the chamber's deviation at each set point (uniform ± ``deviation_bound_c``, one per set
-      point, shared by the visits to it: the readings log the set point): Σ_T (b′(T)·Σ_{i∈T}
-      w_i)²·bound²/3, b′(T) = c₁ + 2c₂T from a quadratic fit of the visits' biases;
+    - the gyro's temperature error at each set point — the chamber's deviation (±
+      ``deviation_bound_c``) and the gyro's place in the volume (± ``uniformity_c``/2), both
+      bounded per set point and shared by the visits to it (the readings log the set point),
+      in ANY pattern (as 5.1.3.4's :func:`correlated_deviation_slope_bound`: a chamber
+      sensor's gain error and the volume's gradient both grow with the set point's distance
+      from ambient): one rectangular line of half-width (δ + U/2)·Σ_T |b′(T)·Σ_{i∈T} w_i|,
+      the largest slope change over every sign pattern, b′(T) = c₁ + 2c₂T from a quadratic
+      fit of the visits' biases;
     - the chamber's periodic fluctuation (amplitude ``fluctuation_c``, period ``period_s``,
       phase unknown, uniform): A·|Σ w_i b′(T_i) e^{2πi t_i/P}|/√2 (the record's mean of
       the sinusoid bounded by its mid-time value); A·Σ|w_i b′(T_i)|/√2 without a period;
-    - the gyro's place in the volume (uniform ± ``uniformity_c``/2, common to every visit):
-      |Σ w_i b′(T_i)|·(uniformity_c/2)/√3 (0 for a linear b(T)).
     The residual scatter about the line is not used: a curved b(T) spreads the residuals by
     b₂(T − T̄)² and leaves the slope through points symmetric about T_BASE unbiased."""
     T = np.array([p[0] for p in pts], float)
@@ -874,21 +888,18 @@ def bias_tc_budget(pts, drift_u, deviation_bound_c: float, fluctuation_c: float,
     D = np.array([[drift_u(abs(ti - tj)) ** 2 if ti != tj else 0.0 for tj in tm] for ti in tm])
     u_drift = math.sqrt(max(-0.5 * float(w @ D @ w), 0.0))
     dev = [db[T == Tv][0] * float(w[T == Tv].sum()) for Tv in np.unique(T)]
-    u_dev = deviation_bound_c / math.sqrt(3) * math.sqrt(float(np.sum(np.square(dev))))
+    h_tu = rg.gyro_temperature_bound_c(deviation_bound_c, uniformity_c) * float(np.abs(dev).sum())
     wd = w * db
     mag = abs(complex(np.sum(wd * np.exp(2j * math.pi * tm / period_s)))) if period_s \
         else float(np.abs(wd).sum())
     u_fl = abs(fluctuation_c) * mag / math.sqrt(2.0)
-    u_pos = abs(float(wd.sum())) * 0.5 * uniformity_c / math.sqrt(3)
-    return gum(lambda s, d, dv, fl, ps: s + d + dv + fl + ps, [
+    return gum(lambda s, d, dv, fl: s + d + dv + fl, [
         from_u("slope", slope, math.sqrt(float(parts @ parts)),
                dof=_ws(parts, [p[3] for p in pts]), source="noise of the visits' bias means"),
         from_u("drift", 0.0, u_drift, dof=DOF_U_WITHIN_10PCT,
                source="bias drift over the session (Allan fit: RRW, BI), variogram form"),
-        from_u("dT_set", 0.0, u_dev, type="B",
-               source="chamber deviation at each set point (rectangular, shared by its visits)"),
-        from_u("dT_fluct", 0.0, u_fl, type="B", source="chamber's periodic fluctuation"),
-        from_u("dT_place", 0.0, u_pos, type="B", source="the gyro's place in the volume")])
+        type_b("dT_set", 0.0, h_tu, "rectangular", source=SLOPE_TEMPERATURE_SOURCE),
+        from_u("dT_fluct", 0.0, u_fl, type="B", source="chamber's periodic fluctuation")])
 
 
 def _static(ctx: Context):
@@ -2409,8 +2420,7 @@ def g_sensitivity(ctx: Context) -> Item:
                     from_u("drift", 0.0, u_dr_, dof=DOF_U_WITHIN_10PCT,
                            source="bias drift over the turn projected on the regressor, "
                                   "u_drift(duration)·√(2/n)"),
-                    from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B",
-                           source="scale factor, relative")])
+                    rate_table_line("e_K", ctx.rate_table_u_rel, "scale factor, relative")])
 
     names = list(res)
     pts = [point(n) for n in names]

@@ -32,6 +32,8 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "chamber_uniformity_c": repr(eq.chamber.uniformity_c),
           "chamber_fluctuation_period_s": repr(eq.chamber.fluctuation_period_s),
           "ratiometric": "true" if g.ratiometric else "false"}
+    if eq.rate_table_u_rel is None:      # no certificate u: the budgets read Table 2's bound
+        del md["rate_table_u_rel"]
     res = run_rate_session(plan(proto, b), b, seed, room_temperature_c=20.0, metadata=md,
                            noise=noise)
     res.truth["items"] = truth(b, proto)

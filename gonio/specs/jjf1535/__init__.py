@@ -52,7 +52,7 @@ READINGS_TAKEN = (
 def make_context(rd, proto: JJFProtocol):
     """The :class:`~.items.Context` of a readings file: null, latitude, units from the metadata
     (the protocol's values when the metadata lacks them)."""
-    from gonio.specs._rate_family.rate_records import metadata_number
+    from gonio.specs._rate_family.rate_records import metadata_number, stated_rate_table_u
     from gonio.specs.jjf1535 import items as _items_mod
 
     md = rd.metadata
@@ -69,7 +69,7 @@ def make_context(rd, proto: JJFProtocol):
         room_temperature_c=metadata_number(md, "room_temperature_c",
                                        p["protocol"]["room_temperature_c"], rd.path),
         protocol=p,
-        rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        rate_table_u_rel=stated_rate_table_u(md, rd.path),
         rate_table_ripple_rel=metadata_number(md, "rate_table_ripple_rel", 5.0e-4, rd.path),
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
         chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path),

@@ -29,7 +29,8 @@ from gonio.analysis.noise.stream import value_range
 from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
-                                                   segment_samples, sf_calibration_means)
+                                                   segment_samples, sf_calibration_means,
+                                                   rate_table_line)
 from gonio.units import S_PER_H
 from gonio.specs.jjf1535.keys import ITEM_ROWS
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b
@@ -191,8 +192,7 @@ def scale_factor(ctx: Context) -> Item:
         u3 = from_u("s_K", 0.0, cals[0]["se_K"], dof=len(cals[0]["rates"]) - 2,
                     source="least-squares standard error of K (one calibration)")
     inputs = [from_u("K_m", Kbar, 0.0, type="A", source="mean of K_m"),
-              from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B",
-                     source="rate table, relative (u1)"),
+              rate_table_line("e_table", ctx.rate_table_u_rel, "rate table, relative (u1)"),
               from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B",
                      source="data acquisition, relative (u2)"),
               u3]
