@@ -282,6 +282,47 @@ def test_sf_temperature_coefficient_carries_correlated_deviations(iec_noise_free
     assert it.uncertainty.u_c >= 100 * h / math.sqrt(3) / K[ib] * 0.999
 
 
+def test_sf_temperature_coefficient_carries_the_place_in_the_volume(iec_noise_free):
+    """5.1.3.4 and 5.3.3.6: the gyro's temperature error at each set point is the chamber's
+    deviation AND its place in the volume (± half the uniformity, bounded at each set point
+    and free to follow it), in any pattern, as a_BASE and the bias take them (δ + U/2):
+    the slope line's half-width is the largest slope change over every sign pattern at
+    ±(δ + U/2), enumerated with numpy.polyfit on the item's K_i(T_i) (5.1.3.4) and on the
+    visits' bias polynomial b′(T) (5.3.3.6). Mutation: δ alone (the uniformity dropped)
+    fails both."""
+    import itertools
+
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs.iec62047_20 import calibrate
+
+    _, b, res, p = iec_noise_free
+    md = {k: str(v) for k, v in res.metadata.items()}
+    md.update(chamber_deviation_bound_c="2.0", chamber_uniformity_c="2.0")
+    keep = res.data["test"].isin(["scale_factor", "sf_temperature", "bias",
+                                  "bias_temperature", "static"])
+    r = calibrate(RateReadings(res.data[keep], md), p)
+    it = r.items["sf_temperature_coefficient"]
+    T, K = np.asarray(it.details["temperatures_c"], float), np.asarray(it.details["K_i"], float)
+    slope = np.polyfit(T, K, 1)[0]
+    bound = 2.0 + 2.0 / 2
+    h = max(abs(np.polyfit(T, K + slope * bound * np.array(s), 1)[0] - slope)
+            for s in itertools.product((-1.0, 1.0), repeat=T.size))
+    assert _comp(it, "dT")["u"] == pytest.approx(h / math.sqrt(3), rel=1e-6)
+    # 5.3.3.6: the visits' set points, b′ from a quadratic through the visits' biases
+    bt = r.items["bias_temperature_coefficient"]
+    Tv = np.asarray(bt.details["temperatures_c"], float)
+    Bv = np.asarray(bt.details["bias_dps"], float)
+    c2 = np.polyfit(Tv, Bv, 2)
+    s0 = np.polyfit(Tv, Bv, 1)[0]
+    Tu = np.unique(Tv)
+    hb = 0.0
+    for sg in itertools.product((-1.0, 1.0), repeat=Tu.size):
+        d = {t: g * bound for t, g in zip(Tu, sg)}
+        moved = Bv + np.array([np.polyval(np.polyder(c2), t) * d[t] for t in Tv])
+        hb = max(hb, abs(np.polyfit(Tv, moved, 1)[0] - s0))
+    assert _comp(bt, "dT_set")["u"] == pytest.approx(hb / math.sqrt(3), rel=1e-6)
+
+
 def test_noise_items_carry_the_chamber_fluctuation(iec_noise_free):
     """5.4.5.1 b), c): the fluctuation's amplitude × the bias temperature coefficient (here
     the bench's b(T) slope over the 5.3.3.6 visits) through the in-band Welch estimate; 0 where

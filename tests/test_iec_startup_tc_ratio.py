@@ -99,11 +99,15 @@ def test_bias_tc_budget_against_the_bench_model(tmp_path):
 
 
 def test_bias_tc_budget_terms_by_hand():
-    # three visits at −10, 0, +10 °C, b′ = 0.01 everywhere, only the chamber deviation:
-    # w = (−1/20, 0, 1/20), u = 0.01·(2/√3)·√(2·(1/20)²)
+    # three visits at −10, 0, +10 °C, b′ = 0.01 everywhere, only the gyro's temperature
+    # error at the set points, any pattern within ±(δ + U/2): w = (−1/20, 0, 1/20), the
+    # slope moves by at most (δ + U/2)·0.01·(1/20 + 1/20), rectangular
     pts = [(-10.0, -0.1, 0.0, 5, 0.0), (0.0, 0.0, 0.0, 5, 1.0), (10.0, 0.1, 0.0, 5, 2.0)]
     u = bias_tc_budget(pts, lambda s: 0.0, 2.0, 0.0, None, 0.0)
-    assert u.u_c == pytest.approx(0.01 * 2 / math.sqrt(3) * math.sqrt(2) / 20, rel=1e-9)
+    assert u.u_c == pytest.approx(2.0 * 0.01 * (2 / 20) / math.sqrt(3), rel=1e-9)
+    # the place in the volume adds its half-width linearly: (2 + 0.4/2) °C
+    u = bias_tc_budget(pts, lambda s: 0.0, 2.0, 0.0, None, 0.4)
+    assert u.u_c == pytest.approx(2.2 * 0.01 * (2 / 20) / math.sqrt(3), rel=1e-9)
     # a walk alone: variance −½ wᵀDw with D = q²|Δt| = q²·(w₁w₃·2·2)/(−2)... by hand 1/200·q²
     q = 0.3
     u = bias_tc_budget(pts, lambda s: q * math.sqrt(s), 0.0, 0.0, None, 0.0)

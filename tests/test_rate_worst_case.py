@@ -57,6 +57,18 @@ def test_worst_equipment_sits_at_the_bounds_of_the_bench_file():
     assert w.chamber.fluctuation_c == TABLE2_FLUCTUATION_C
     assert w.chamber.uniformity_c == TABLE2_UNIFORMITY_C
     assert w.chamber.position_offset() == TABLE2_UNIFORMITY_C / 2
+    # the place in the volume follows the set point with the deviation's sign
+    assert [w.chamber.position_at(t) for t in (-40.0, 20.0, 22.5, 85.0)] == \
+        [-TABLE2_UNIFORMITY_C / 2, -TABLE2_UNIFORMITY_C / 2, TABLE2_UNIFORMITY_C / 2,
+         TABLE2_UNIFORMITY_C / 2]
+    # no certificate u stated: the table's rate error at Table 2's bound in the case, drawn
+    # uniformly within it in typeb (sd bound/√3)
+    bare = replace(eq, rate_table_u_rel=None)
+    assert worst_equipment(bare, 11, temperature_split_c=20.0).rate_table.rate_error_rel \
+        == TABLE2_RATE
+    drawn = np.array([draw_equipment(bare, s).rate_table.rate_error_rel for s in range(2000)])
+    assert np.abs(drawn).max() <= TABLE2_RATE
+    assert np.std(drawn) == pytest.approx(TABLE2_RATE / math.sqrt(3), rel=0.06)
     assert w.rate_table.ripple_rel == TABLE2_RATE
     # a bench stating more than Table 2 keeps its own (never below what it states)
     big = replace(eq, chamber=replace(eq.chamber, fluctuation_c=1.5))
@@ -115,14 +127,17 @@ def test_a_worst_trial_runs_at_the_bounds(worst_trials):
         __import__("gonio.pipeline.coverage", fromlist=["x"]).case_stream(spec, "worst")
     for readings, truth in trials:
         e = truth["equipment"]
-        # the table's rate error is drawn from its certificate (not held at its 2u)
-        assert e["rate_table"]["rate_error_rel"] != pytest.approx(TABLE2_RATE)
+        # the bench states no certificate u for its table: the readings carry none, and
+        # the table's rate error sits at Table 2's 0.05 % (a bound, not a certificate's 2u)
+        assert e["rate_table"]["rate_error_rel"] == pytest.approx(TABLE2_RATE, rel=1e-12)
+        assert "rate_table_u_rel" not in readings.metadata
         assert e["chamber"]["fluctuation_c"] == TABLE2_FLUCTUATION_C
         # the readings state the ripple at its bound: the budget is given what the table is
         assert float(readings.metadata["rate_table_ripple_rel"]) == TABLE2_RATE
         # the gyro's own temperature at each chamber set point: set point ± 2 °C (the
-        # deviation's sign) + 1 °C (the volume's warm end), within the fluctuation's ±1 °C
-        # (the records are short against its 900-s period)
+        # deviation's sign) ± 1 °C (its place in the volume, following the set point with
+        # the deviation's sign), within the fluctuation's ±1 °C (the records are short
+        # against its 900-s period)
         seen = {}
         for s in truth["segments"]:
             if s["test"] == "sf_temperature" and s["temperature_c"] != 20.0:
@@ -130,7 +145,31 @@ def test_a_worst_trial_runs_at_the_bounds(worst_trials):
                     s["gyro_temperature_c"] - s["temperature_c"])
         assert set(seen) == {70.0, -40.0}
         assert np.mean(seen[70.0]) == pytest.approx(TABLE2_DEVIATION_C + 1.0, abs=1.05)
-        assert np.mean(seen[-40.0]) == pytest.approx(-TABLE2_DEVIATION_C + 1.0, abs=1.05)
+        assert np.mean(seen[-40.0]) == pytest.approx(-TABLE2_DEVIATION_C - 1.0, abs=1.05)
+
+
+def test_the_rate_table_without_a_stated_u_is_table_2s_bound(worst_trials):
+    """A readings file stating no ``rate_table_u_rel`` is budgeted with Table 2's 0.05 % as
+    a rectangular bound (u = 5·10⁻⁴/√3, read off the standard here), not as a certificate's
+    u; one stating it keeps a normal line of that u. Mutation: the old default (2.5·10⁻⁴
+    normal) fails the first assertion."""
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.pipeline.dispatch import screen_and_calibrate
+
+    spec, proto, trials = worst_trials
+    readings, _ = trials[0]
+
+    def line(md):
+        rd = RateReadings(readings.data, md)
+        it = screen_and_calibrate(spec, rd, proto).items["scale_factor"]
+        return next(c for c in it.uncertainty.components if c["symbol"] == "e_table")
+
+    bare = line(dict(readings.metadata))
+    assert bare["u"] == pytest.approx(TABLE2_RATE / math.sqrt(3), rel=1e-12)
+    assert "Table 2's 0.05 % as a rectangular bound" in bare["source"]
+    stated = line({**readings.metadata, "rate_table_u_rel": "0.00025"})
+    assert stated["u"] == pytest.approx(2.5e-4, rel=1e-12)
+    assert "Table 2" not in stated["source"]
 
 
 def _kt(spec, proto, readings, truth, **md):
