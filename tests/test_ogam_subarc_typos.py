@@ -112,8 +112,8 @@ def test_a_typo_in_a_round_read_once_refuses_naming_line_and_column(session, tmp
 
 def test_a_7_1_typo_is_set_aside_and_k_rests_on_the_other_rounds(session, tmp_path, capsys):
     """A 7.1 reading that disagrees with 7.4's ten readings of the same stop is set aside
-    (the position is known from them); K and K_l rest on the five other rounds, which the
-    certificate says."""
+    (the position is known from them); K rests on the five other rounds, which the
+    certificate says, and K_l (the range over every round of the programme) is not stated."""
     f = tmp_path / "in" / "readings.csv"
     line = damaged(session, f, "7.1", 2.0)
     capsys.readouterr()
@@ -122,7 +122,8 @@ def test_a_7_1_typo_is_set_aside_and_k_rests_on_the_other_rounds(session, tmp_pa
     assert [(x["line"], x["clause"]) for x in res["findings"] if x["action"] != "flagged"] \
         == [(line, "7.1")]
     assert line in {u["line"] for u in res["unused_readings"]}
-    assert len(res["items"]["scale_factor_nonlinearity"]["details"]["table"]) == 5
+    assert len(res["items"]["scale_factor"]["details"]["table"]) == 5
+    assert not res["items"]["scale_factor_nonlinearity"]["measured"]
     page = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
                                       (tmp_path / "o" / "certificate.html").read_text()))
     assert f"line {line}:" in page and "rests on 5 of the programme" in page

@@ -174,7 +174,7 @@ class AnnexABudget:
                   "gum_validation": {"d_low_arcsec": v.d_low, "d_high_arcsec": v.d_high,
                                      "delta_arcsec": v.delta, "passed": v.passed,
                                      "gum_interval_arcsec": list(v.gum_interval)}}
-        return {
+        out = {
             "components": comps,
             "u_c_arcsec": self.u_c_arcsec,
             "U_arcsec": self.U_arcsec,
@@ -185,6 +185,9 @@ class AnnexABudget:
             **({"points": [dict(p) for p in self.points]} if self.points else {}),
             **({"max_abs_interval": dict(self.max_interval)} if self.max_interval else {}),
         }
+        # the points' U with the table's bound (U = k·u + b): the per-point statement
+        out.update(e_point_statement(out.get("points")))
+        return out
 
     def _summary(self) -> list[str]:
         a = self.annex_rounded
@@ -359,3 +362,31 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     return AnnexABudget(gum=gum, stated_u_c_arcsec=stated_u, stated_U_arcsec=stated_U,
                         annex_rounded=annex_rounded, parameters=params, monte_carlo=mc,
                         validation=val, _rounded_components=rounded)
+
+
+def e_point_statement(points) -> dict:
+    """``extra.uncertainty``'s per-point statement where the points carry the table's bound
+    (:func:`gonio.specs.ogam_draft.calibration.point_u_with_bound`): ``U_arcsec`` the
+    largest U_i = k·u_i + b_i, its ``k``,
+    ``table_bound_arcsec`` b_i, ``u_without_table_arcsec`` u_i and ``U_position_deg``, and
+    ``U_positions_independent_arcsec`` the largest U_i of the table line at MPE/√3 per
+    position (beside, not stated); {} where no point has a bound (a calibrated table, the
+    draft's one budget).
+
+    >>> e_point_statement([{"position_deg": 30.0, "U_arcsec": 0.3, "k": 1.96,
+    ...     "table_bound_arcsec": 0.1, "u_without_table_arcsec": 0.1,
+    ...     "U_positions_independent_arcsec": 0.25}])["U_position_deg"]
+    30.0
+    >>> e_point_statement([{"position_deg": 30.0, "U_arcsec": 0.3, "k": 1.96}])
+    {}
+    """
+    pts = [p for p in points or () if p.get("table_bound_arcsec") is not None]
+    if not pts:
+        return {}
+    w = max(pts, key=lambda p: p["U_arcsec"])
+    return {"U_arcsec": w["U_arcsec"], "k": w["k"],
+            "table_bound_arcsec": w["table_bound_arcsec"],
+            "u_without_table_arcsec": w["u_without_table_arcsec"],
+            "U_position_deg": w["position_deg"],
+            "U_positions_independent_arcsec": max(p["U_positions_independent_arcsec"]
+                                                  for p in pts)}

@@ -1130,7 +1130,9 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;
     # the longest time to reading) stay those of Annex A's reading, not this point's
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
-    points, bounds = _with_table_bounds(points, pos, sub, stops, settings["table_mpe_arcsec"])
+    prog = programme_rounds(protocol) if from_counts else None
+    points, bounds = _with_table_bounds(points, pos, sub, stops, settings["table_mpe_arcsec"],
+                                        None if prog is None else prog[0])
     return dataclasses.replace(sub[at], points=points, parameters=params,
                                max_interval=e_max_interval(pts["E_arcsec"], sub,
                                                            positions=pos, table=bounds))
@@ -1141,18 +1143,40 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
 _MPE_TABLE_LINE = "[physical budget: P and K_P as one line]"
 
 
-def _with_table_bounds(points, pos, budgets, stops, mpe_arcsec: float):
+def _with_table_bounds(points, pos, budgets, stops, mpe_arcsec: float, programme_stops=None):
     """The per-point dicts ``points`` with the table's bound, u and ν without the table line
     (:func:`_point_table_bounds`) where some point has one, and those bounds."""
-    bounds = _point_table_bounds(pos, budgets, stops, mpe_arcsec)
+    bounds = _point_table_bounds(pos, budgets, stops, mpe_arcsec, programme_stops)
     if any(b > 0 for b in bounds[0]):
         points = tuple(dict(d, table_bound_arcsec=b, u_without_table_arcsec=u,
-                            nu_without_table=None if math.isinf(n) else n)
+                            nu_without_table=None if math.isinf(n) else n,
+                            U_positions_independent_arcsec=d["U_arcsec"],
+                            **point_u_with_bound(b, u, n))
                        for d, b, u, n in zip(points, *bounds))
     return points, bounds
 
 
-def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float):
+def point_u_with_bound(b_arcsec: float, u_arcsec: float, nu: float) -> dict:
+    """E_i's stated U where the table enters by its bound b_i (:func:`_point_table_bounds`):
+    U_i = k·u_i + b_i, k = t95(ν_i) of the point's other lines (u_i, ν_i without the table
+    line; :func:`gonio.result.statement.coverage_k`, ν as stated). For every table within its
+    MPE the error of E_i is δ + ε with |δ| ≤ b_i and ε of u_i, so P(|δ + ε| ≤ k·u_i + b_i) ≥
+    P(|ε| ≤ k·u_i) = 95 % (JCGM 100 4.3.7 for δ, as E's extreme takes it,
+    :func:`e_max_interval`); the table line at MPE/√3 per position (positions independent)
+    does not hold the corner table (b = 0.457″ at 360° where that U was 0.36″). Its k is the
+    one of u_i.
+
+    >>> d = point_u_with_bound(0.457, 0.1, math.inf)
+    >>> round(d["U_arcsec"], 4), round(d["k"], 2)
+    (0.653, 1.96)
+    """
+    from gonio.result.statement import coverage_k
+
+    k = coverage_k(nu)
+    return {"U_arcsec": float(k * u_arcsec + b_arcsec), "k": float(k)}
+
+
+def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float, programme_stops=None):
     """Per 7.4 point (the physical budgets ``budgets``): the table's bound b_i on E_i, and u
     and ν of the point's budget without its table line, for E's extreme
     (:func:`e_max_interval`). Where the point's table line is the MPE's through the 7.1 K
@@ -1163,8 +1187,13 @@ def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float):
     stop at +MPE — moves every point at once, which per-point lines at MPE/√3 combined
     with the other points' noise do not hold. u without it: √(u_c² − u_P²), ν by
     Welch–Satterthwaite over the other lines (JCGM 100 G.4.1). A calibrated table's line or
-    Annex A's P stays in u (b_i = 0)."""
+    Annex A's P stays in u (b_i = 0). ``programme_stops``: the programme's 7.1 stops, b_i
+    the larger over them and over the stops read (a 7.1 reading set aside never lowers it:
+    :func:`~gonio.specs.ogam_draft.table_periodic.programme_bound`); the box's vertex in the
+    stated reading of the MPE at the zero (:func:`~gonio.specs.ogam_draft.table_periodic.
+    table_worst_bound`)."""
     from gonio.specs.ogam_draft.budget_extra import table_error_coefficients
+    from gonio.specs.ogam_draft.table_periodic import programme_bound, table_worst_bound
 
     out_b, out_u, out_n = [], [], []
     for theta, b in zip(pos, budgets):
@@ -1175,11 +1204,11 @@ def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float):
             out_u.append(float(b.u_c_arcsec))
             out_n.append(float(b.gum.dof))
             continue
-        c = np.array(list(table_error_coefficients(float(theta), stops).values()))
         rest = [x for x in b.gum.contributions if x is not tab[0]]
         u2 = sum(x.contribution ** 2 for x in rest)
         den = sum(x.contribution ** 4 / x.dof for x in rest if math.isfinite(x.dof) and x.dof > 0)
-        out_b.append(float(mpe_arcsec) * float(np.sum(np.abs(c))))
+        out_b.append(programme_bound(lambda st, th=float(theta): table_worst_bound(
+            table_error_coefficients(th, st), mpe_arcsec), stops, programme_stops))
         out_u.append(math.sqrt(u2))
         out_n.append(math.inf if den == 0 else u2 * u2 / den)
     return out_b, out_u, out_n
@@ -2128,7 +2157,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
                   chamber=chamber_temperature(readings, protocol, gyro_type)[0],
                   table_correction=t_corr, table_note="; ".join(x for x in (t_note, p_note) if x),
-                  stop_deg=stop, zero_deg=zero)
+                  stop_deg=stop, zero_deg=zero, programme=programme_rounds(protocol))
         # the draft's reading: the 7.1 mean as measured, the MPE's table line
         draft_k = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
                                          **dict(kw, table_correction=None))
@@ -2482,15 +2511,31 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
                    gyro_type=gyro_type, table_calibration=table_calibration).result()
 
 
+def programme_rounds(proto: Protocol):
+    """(θ, stops, zeros) of the programme's 7.1 rounds, in degrees, the positions the table
+    bounds of K and E take beside the rounds read (a set-aside never lowers a bound:
+    :func:`~gonio.specs.ogam_draft.table_periodic.programme_bound`); None without 7.1.
+
+    >>> [a.tolist() for a in programme_rounds(load_protocol("ogam-draft"))][0]
+    [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
+    """
+    if proto.scale_factor is None:
+        return None
+    stop = np.array([float(r.stop_deg) for r in proto.scale_factor.rounds])
+    zero = np.array([float(r.start_deg) for r in proto.scale_factor.rounds])
+    return stop - zero, stop, zero
+
+
 def programme_conditions(proto: Protocol) -> dict:
     """The programme's 7.6 rates and 7.7 orientations, each with its reference (7.4's run
-    when the protocol reuses it), as :func:`~gonio.specs.ogam_draft.items.compute_characteristics`
-    takes them; an item the protocol does not plan: None (the conditions read).
+    when the protocol reuses it), and its 7.1 angles (K_l's rounds), as
+    :func:`~gonio.specs.ogam_draft.items.compute_characteristics` takes them; an item the
+    protocol does not plan: None (the conditions read).
 
     >>> p = load_protocol("ogam-draft")
     >>> c = programme_conditions(p)
-    >>> c["rates_dps"], c["orientations"]
-    ((1.0, 10.0, 60.0, 100.0, 150.0, 200.0, 250.0, 300.0), ('up', 'north', 'east'))
+    >>> c["rates_dps"], c["orientations"], c["scale_factor_deg"]
+    ((1.0, 10.0, 60.0, 100.0, 150.0, 200.0, 250.0, 300.0), ('up', 'north', 'east'), (60.0, 120.0, 180.0, 240.0, 300.0, 360.0))
     """
     rates = orients = None
     if proto.rate_consistency:
@@ -2499,7 +2544,9 @@ def programme_conditions(proto: Protocol) -> dict:
     if proto.pointing_consistency:
         have = [it.orientation for it in proto.pointing_consistency]
         orients = tuple(dict.fromkeys([proto.pointing_reference] + have))
-    return {"rates_dps": rates, "orientations": orients}
+    sf = None if proto.scale_factor is None else tuple(
+        float(r.stop_deg - r.start_deg) for r in proto.scale_factor.rounds)
+    return {"rates_dps": rates, "orientations": orients, "scale_factor_deg": sf}
 
 
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,

@@ -99,6 +99,21 @@ def screening_notes(res: dict, L: dict, add) -> None:
         add("p", [L["more_findings"].format(n=len(found) - MAX_FINDING_LINES)])
 
 
+def _e_u_line(res: dict, unc: dict, L: dict, U: float, lang: str, by_iv: bool, one: bool):
+    """The segments of E's U line under the results: the per-point U with the table's bound
+    (U = k·u + b, results.json ``extra.uncertainty.table_bound_arcsec``) where the points
+    carry it, else U and k (the draft's one budget, or E stated by max|E_i| ± U)."""
+    bound = by_iv and not one and unc.get("table_bound_arcsec") is not None
+    key = ("U_line_one_budget" if one else "U_line_points_bound" if bound
+           else "U_line_points") if by_iv else "U_line_p"
+    more = dict(u=_num(res, "extra.uncertainty.u_without_table_arcsec", "U", U),
+                b=_num(res, "extra.uncertainty.table_bound_arcsec", "U", U),
+                pos=f"{unc['U_position_deg']:g}") if bound else {}
+    return segments(L[key], U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
+                    k=_num(res, "extra.uncertainty.k", "k", U),
+                    p=coverage_text(ANNEX_A_COVERAGE, lang), **more)
+
+
 def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict | None,
                        lang: str = "en", cjk: bool = True) -> dict:
     """The certificate's content from ``results`` (results.json): header fields and the list
@@ -133,11 +148,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
     if U is not None:
         by_iv = e_by_interval(res)
         one = unc.get("budget_kind") == "draft"      # the draft's one budget at every point
-        add("p", segments(L[("U_line_one_budget" if one else "U_line_points") if by_iv
-                            else "U_line_p"],
-                          U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
-                          k=_num(res, "extra.uncertainty.k", "k", U),
-                          p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
+        add("p", _e_u_line(res, unc, L, U, lang, by_iv, one), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
         dr = unc.get("draft_reading")
         if by_iv:        # E's one statement, its interval (the draft's reading: beside table)

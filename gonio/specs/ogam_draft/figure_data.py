@@ -143,7 +143,8 @@ def consistency(c, col: str) -> dict:
 
 def budget(d: dict) -> dict:
     """|c_i|·u_i of E's budget components with u_c and U (Annex A.5–A.7): ``d`` the budget's
-    ``to_dict()`` (kept even when E was not measured, for reference)."""
+    ``to_dict()`` (kept even when E was not measured, for reference); U the per-point
+    statement it states (with the table's bound where the points carry it)."""
     return {"components": [{"symbol": c["symbol"], "type": c["type"],
                             "contribution_arcsec": c["contribution_arcsec"]}
                            for c in d["components"]],

@@ -51,7 +51,9 @@ import numpy as np
 from gonio.errors import GonioError
 from gonio.result.statement import coverage_k, signed_text
 from gonio.specs.ogam_draft import table_calibration as tcal
-from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
+from gonio.specs.ogam_draft.table_periodic import (TABLE_ZERO_READINGS, TABLE_ZERO_STATED,
+                                                   periodic_response, programme_bound,
+                                                   table_worst_bound, worst_order)
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, combined_coverage_factor, from_u,
                          monte_carlo, needs_combined_k, propagate, type_b, validate_gum)
@@ -71,6 +73,7 @@ __all__ = [
     "nonlinearity_calibrated_budget", "consistency_corrected_budget",
     "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget", "range_table_bound",
+    "shifted_belt",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
     "angle_deviation_budget", "repeatability_budget", "consistency_budget",
     "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo",
@@ -473,7 +476,7 @@ def scale_factor_table_u_rel(theta_deg, table_mpe_arcsec: float, stop_deg=None,
 
 
 def scale_factor_table_bound_rel(theta_deg, table_mpe_arcsec: float, stop_deg=None,
-                                 zero_deg=None) -> float:
+                                 zero_deg=None, reading: str = TABLE_ZERO_STATED) -> float:
     """The largest |δK/K| the table's positioning errors can give when each position the 7.1
     rounds reach is known only to err within ±MPE (A.4.1) and nothing is known of how the
     positions' errors go together (one table's errors are one curve, correlated):
@@ -486,9 +489,18 @@ def scale_factor_table_bound_rel(theta_deg, table_mpe_arcsec: float, stop_deg=No
 
     >>> round(scale_factor_table_bound_rel([60, 120, 180, 240, 300, 360], 0.1) / PPM, 4)
     0.3524
+
+    That is the physical reading of the MPE at the common zero (every position within ±MPE,
+    the zero included); the draft's (A.4.1: the angle from the zero within ±MPE, the zero's
+    own error 0) is ``reading="draft"``, half of it here (:func:`~gonio.specs.ogam_draft.
+    table_periodic.table_worst_bound`, the one function of that ambiguity):
+
+    >>> round(scale_factor_table_bound_rel([60, 120, 180, 240, 300, 360], 0.1,
+    ...                                    reading="draft") / PPM, 4)
+    0.1762
     """
-    c = np.array(list(scale_factor_table_coefficients(theta_deg, stop_deg, zero_deg).values()))
-    return float(table_mpe_arcsec) * float(np.sum(np.abs(c)))
+    return table_worst_bound(scale_factor_table_coefficients(theta_deg, stop_deg, zero_deg),
+                             table_mpe_arcsec, reading)
 
 
 def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
@@ -907,14 +919,17 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
 
 
 def _scale_factor_table_lines_of(k_i, th, table_mpe_arcsec: float, table_correction,
-                                 table_note: str, stop_deg=None, zero_deg=None) -> list:
+                                 table_note: str, stop_deg=None, zero_deg=None,
+                                 programme=None) -> list:
     """K's table line (:func:`scale_factor_budget`): the calibration's where the table is
     calibrated, else ``P_K``: the table's errors at the positions the 7.1 rounds reach, each
     within ±MPE (A.4.1) and correlated as one table's errors are in a way the laboratory does
     not know, so their worst linear combination (:func:`scale_factor_table_bound_rel`) taken
     as one rectangular line (JCGM 100 4.3.7, F.2.4.4). The positions-independent reading
     (:func:`scale_factor_table_u_rel`) and the periodic one (:func:`scale_factor_table_line`)
-    are named in the line's source, not stated."""
+    are named in the line's source, not stated. ``programme``: (θ, stops, zeros) of the
+    programme's 7.1 rounds (None: the rounds read): the bound is the larger of theirs and the
+    rounds read's (:func:`~gonio.specs.ogam_draft.table_periodic.programme_bound`)."""
     if table_correction is not None:
         tc_ = table_correction
         return [_Line(from_u("P_Kc", 0.0, tc_.u_counts_per_deg, dof=tc_.dof, type="B",
@@ -926,11 +941,23 @@ def _scale_factor_table_lines_of(k_i, th, table_mpe_arcsec: float, table_correct
     kbar = abs(float(np.mean(k_i)))
     tl = scale_factor_table_line(th, table_mpe_arcsec)
     coeffs = scale_factor_table_coefficients(th, stop_deg, zero_deg)
-    bound = scale_factor_table_bound_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
+
+    def bound_of(rounds, reading=TABLE_ZERO_STATED):
+        return scale_factor_table_bound_rel(*rounds[:1], table_mpe_arcsec, *rounds[1:],
+                                            reading=reading)
+
+    read = (th, stop_deg, zero_deg)
+    bound = programme_bound(bound_of, read, programme)
     u_ind = scale_factor_table_u_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
     beside = (f"beside, not stated: the positions independent u = {u_ind / PPM:.3g} ppm; one "
               f"periodic error at the MPE, worst order {tl.order}, half-width "
-              f"{tl.half_width_rel_harmonic / PPM:.3g} ppm")
+              f"{tl.half_width_rel_harmonic / PPM:.3g} ppm; the draft's reading of the MPE at "
+              f"the zero (the angle from the zero within the MPE) "
+              f"±{programme_bound(lambda r: bound_of(r, 'draft'), read, programme) / PPM:.3g}"
+              " ppm")
+    if bound > bound_of(read):
+        beside += (f"; the bound of the programme's {len(programme[0])} rounds, not of the "
+                   f"{th.size} read: a round set aside never lowers it")
     if table_note:
         beside += f"; {table_note}"
     pos = ", ".join(f"{p:g}" for p in coeffs)
@@ -950,7 +977,7 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         tilt_correction=None,
                         table_correction: TableCorrection | None = None,
                         table_note: str = "", stop_deg=None,
-                        zero_deg=None) -> ItemUncertainty:
+                        zero_deg=None, programme=None) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
@@ -963,9 +990,9 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     F.2.4.4): it holds for every table within its MPE, the zero at −MPE and every stop at
     +MPE included, and is over-wide for a table well inside it (docs/draft-readings.md 7.1,
     "K's table line"). ``stop_deg``/``zero_deg``: the rounds' positions (None: zeroed at 0°,
-    stopped at θ_i; the 360° stop is the zero). The positions-independent reading
-    (:func:`scale_factor_table_u_rel`) and the periodic one (:func:`scale_factor_table_line`)
-    are named in the line's source. The count quantisation, triangular ±1 count:
+    stopped at θ_i; the 360° stop is the zero; ``programme``: the programme's rounds, the bound
+    never below theirs). The positions-independent reading and the periodic one are named in
+    the line's source. The count quantisation, triangular ±1 count:
     u = (1/n)√Σ(u_C/θ_i)². The Type A scatter also holds the table's per-visit scatter.
 
     ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`,
@@ -1024,7 +1051,7 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   source=f"scatter of the {n} rounds' K_i, s/√n"),
                            "scatter of K_i", False, "7.1"))
     lines.extend(_scale_factor_table_lines_of(k_i, th, table_mpe_arcsec, table_correction,
-                                              table_note, stop_deg, zero_deg))
+                                              table_note, stop_deg, zero_deg, programme))
     lines.append(_Line(from_u("q_K", 0.0, float(np.sqrt(np.sum(u_q ** 2))) / n, type="B",
                               source="count quantisation, ±1 count triangular per C_i"),
                        "count quantisation", True, "7.1 (pulse count)"))
@@ -1278,7 +1305,7 @@ def range_table_positions(theta_deg, stop_deg=None, zero_deg=None):
 
 
 def range_table_bound(k_i, theta_deg, table_mpe_arcsec: float, stop_deg=None,
-                      zero_deg=None) -> float:
+                      zero_deg=None, reading: str = TABLE_ZERO_STATED) -> float:
     """The largest shift of K_l's range (draft 7.2), in %, that any table within its MPE can
     give the 7.1 rounds: the half-width of K_l's table line in its stated reading
     (:func:`nonlinearity_corrected_budget`), the analogue of K's MPE·Σ|c_p|
@@ -1301,13 +1328,20 @@ def range_table_bound(k_i, theta_deg, table_mpe_arcsec: float, stop_deg=None,
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> round(range_table_bound([3600.0] * 6, th, 0.1) * 1e5, 4)
     9.2593
+
+    In the draft's reading of the MPE at the zero (:func:`~gonio.specs.ogam_draft.
+    table_periodic.table_worst_bound`) the zero's terms go; the widest pair is then the 60°
+    round against the 120° one, MPE·(1/60° + 1/120°):
+
+    >>> round(range_table_bound([3600.0] * 6, th, 0.1, reading="draft") * 1e5, 4)
+    6.9444
     """
     k_i = np.asarray(k_i, dtype=float)
     th = np.asarray(theta_deg, dtype=float)
-    _, m = range_table_positions(th, stop_deg, zero_deg)
+    pos, m = range_table_positions(th, stop_deg, zero_deg)
     w = m / (th * ARCSEC_PER_DEG)[:, None] * (k_i / float(np.mean(k_i)))[:, None] * 100.0
-    spread = np.abs(w[:, None, :] - w[None, :, :]).sum(axis=2)
-    return float(table_mpe_arcsec) * float(spread.max())
+    return max(table_worst_bound(dict(zip(pos, w[i] - w[j])), table_mpe_arcsec, reading)
+               for i in range(th.size) for j in range(th.size))
 
 
 def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int,
@@ -1372,6 +1406,43 @@ def _round_errors(k_i, th, errs, rng, draws: int, tilt_measured, tilt_round_coup
     return k_i, errs, src
 
 
+def shifted_belt(x, errors, shift: float) -> tuple[float, float]:
+    """The range belt's interval (:func:`uncertainty.stdev.range_belt_interval`) for values
+    ``x`` whose measured range r may differ from the one the belt's ``errors`` alone would
+    give by up to ``shift`` (K_l's table: any table within its MPE moves the range by at
+    most D, :func:`range_table_bound`): [R_lo(r − D), R_hi(r + D)], the belt inverted at the
+    two ends of the ranges the table-free measurement can have had, along the measured
+    pattern (the robust belt holds every pattern). R_lo and R_hi rise with r, so whenever the
+    table-free range lies in the belt of the true R, R lies in this interval: ≥ 95 % for every
+    table within the MPE. Moving the belt's ends out by D, [R_lo(r) − D, R_hi(r) + D], holds
+    only where they rise no faster than r; near the noise floor R_hi rises about twice as fast
+    (tests/test_kl_belt_shift.py). r − D ≤ 0: the lower end is 0.
+
+    >>> rng = np.random.default_rng(1)
+    >>> e = rng.normal(0.0, 1.0, (20_000, 2))
+    >>> from uncertainty.stdev import range_belt_interval
+    >>> shifted_belt([0.0, 4.0], e, 0.0) == range_belt_interval([0.0, 4.0], e)
+    True
+    >>> lo, hi = shifted_belt([0.0, 4.0], e, 1.0)
+    >>> lo == range_belt_interval([0.5, 3.5], e)[0], hi == range_belt_interval([-0.5, 4.5], e)[1]
+    (True, True)
+    """
+    from uncertainty.stdev import range_belt_interval
+
+    x = np.asarray(x, dtype=float)
+    m, r = float(x.mean()), float(x.max() - x.min())
+    if r > 0:
+        unit = (x - m) / r
+    else:                       # as range_belt_interval: one value apart from the rest
+        unit = np.zeros(x.size)
+        unit[-1] = 1.0
+        unit -= unit.mean()
+    if shift <= 0.0:
+        return range_belt_interval(x, errors)
+    lo = 0.0 if r - shift <= 0.0 else range_belt_interval(m + (r - shift) * unit, errors)[0]
+    return float(lo), float(range_belt_interval(m + (r + shift) * unit, errors)[1])
+
+
 def _range_table_line(bound: float, belt, worst: RangeTableOrder) -> _Line:
     """K_l's table line ``K_tab`` (:func:`nonlinearity_corrected_budget`): rectangular with
     the half-width ``bound`` of :func:`range_table_bound` (JCGM 100 4.3.7), its source naming
@@ -1381,8 +1452,9 @@ def _range_table_line(bound: float, belt, worst: RangeTableOrder) -> _Line:
         source=f"table angle at every position the 7.1 rounds reach within the A.4.1 MPE: "
                f"the largest shift of the range over every table within it, MPE·max_ij "
                f"Σ_p|w_ip − w_jp| = {bound:.3g} % (the common zero shared, the 360° stop "
-               f"cancelling; JCGM 100 4.3.7: known by its bound), added to each end of the "
-               f"noise's belt [{belt[0]:.4g}, {belt[1]:.4g}] %; one periodic error of order "
+               f"cancelling; JCGM 100 4.3.7: known by its bound): the noise's belt "
+               f"[{belt[0]:.4g}, {belt[1]:.4g}] % at the measured range is evaluated at the "
+               f"measured range −/+ it; one periodic error of order "
                f"{worst.order} at the bound reaches {200.0 * worst.half_range_rel:.3g} %; the "
                f"positions drawn independent (the former stated reading) do not hold the "
                f"corner table"),
@@ -1425,8 +1497,9 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     spreads the K_i alike each session: the scatter cannot see it), so not drawn: the belt
     and correction come from the other errors, and the table's largest shift of the range
     within the MPE (:func:`range_table_bound`; rounds zeroed at ``zero_deg``, stopped at
-    ``stop_deg``; None: the draft's 7.1) moves each end of the belt out (bounded draw by draw:
-    ≥ 95 % for every table within the MPE) and is the rectangular line ``K_tab`` in u_c
+    ``stop_deg``; None: the draft's 7.1) widens the belt, evaluated at the measured range
+    −/+ it (:func:`shifted_belt`; bounded draw by draw: ≥ 95 % for every table within the
+    MPE) and is the rectangular line ``K_tab`` in u_c
     (JCGM 100 4.3.7, as K's MPE·Σ|c_p|, :func:`scale_factor_table_bound_rel`). K_l is the
     range whose expected measured range equals the one measured
     (:func:`uncertainty.stdev.corrected_range`; the table's shift, of unknown sign, not
@@ -1445,12 +1518,12 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     --------
     Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the count errors alone
     (±1 count over 60°) give 2.34·10⁻⁴ % on average, so K_l is negative, stated by [0, upper],
-    the upper end moved out by the table's bound 0.926·10⁻⁴ %:
+    the upper end the belt's at the measured range plus the table's bound 0.926·10⁻⁴ %:
 
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> round(b.value * 1e4, 2), [round(x * 1e4, 2) for x in b.interval], round(b.u_c * 1e4, 2)
-    (-2.34, [0.0, 3.47], 1.2)
+    (-2.34, [0.0, 3.19], 1.2)
     >>> [c.symbol for c in b.components]
     ['K_rng', 'K_tab']
 
@@ -1501,8 +1574,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     lo, hi = c.interval
     if table_reading == "stated":
         # every table within its MPE moves the range by at most ``bound`` draw by draw, so
-        # the noise belt's ends moved out by it hold K_l for every such table (≥ 95 %)
-        lo, hi = max(0.0, lo - bound), hi + bound
+        # the noise belt at the measured range −/+ it holds K_l for every such table (≥ 95 %)
+        lo, hi = shifted_belt(k_i * to_pct, errs[table_reading], bound)
         lines.append(_range_table_line(bound, c.interval, worst))
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))

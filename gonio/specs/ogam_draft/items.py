@@ -292,11 +292,48 @@ def scale_factor(df: pd.DataFrame) -> Characteristic:
                           table=table, used_lines=_lines(rows))
 
 
-def scale_factor_nonlinearity(sf: Characteristic) -> Characteristic:
+def nonlinearity_missing_rounds(theta_read_deg, programme_deg) -> str | None:
+    """*Ambiguity* (7.2): K_l with a round of the programme not read or set aside.
+
+    7.2: K_l = (max K_i − min K_i)/K over "the" rounds of 7.1, the programme's stops. The
+    range over fewer rounds is at most the range over all of them for every instrument (a
+    different, smaller quantity), and the table bound of the rounds left is smaller too (the
+    60° round carries the largest table term): a 7.1 reading set aside left K_l at
+    0.000027; ≤ 0.000121 % where the whole programme gave ≤ 0.00022 %. **Reading taken**:
+    K_l is the range over every round of the programme (the protocol's 7.1 angles); a round
+    of them with no reading left makes K_l not measured, the reason naming each missing
+    angle (K and E rest on the rounds read, their table bounds over the programme's stops);
+    a round is read where a reading's table angle is within 0.001° of it (the protocol's
+    position tolerance). ``programme_deg`` None (the items called without a programme): the
+    rounds read are the programme.
+
+    Returns the reason, or None when every round of the programme was read.
+
+    >>> why = nonlinearity_missing_rounds([120.0, 180.0], (60.0, 120.0, 180.0))
+    >>> why.split(": ")[1].split(";")[0]
+    '60 deg has no reading (2 of 3 rounds read)'
+    >>> nonlinearity_missing_rounds([60.0, 120.0], None) is None
+    True
+    """
+    if programme_deg is None:
+        return None
+    read = np.asarray(theta_read_deg, dtype=float)
+    missing = [float(t) for t in programme_deg
+               if not np.any(np.isclose(read, float(t), rtol=0.0, atol=1e-3))]
+    if not missing:
+        return None
+    n = len(programme_deg)
+    return (f"7.2 is the range of K_i over every round of the programme: "
+            f"{', '.join(f'{t:g}' for t in missing)} deg has no reading ({n - len(missing)} of "
+            f"{n} rounds read); not stated from fewer rounds (read the missing round)")
+
+
+def scale_factor_nonlinearity(sf: Characteristic, programme_deg=None) -> Characteristic:
     """Scale-factor nonlinearity K_l, draft 7.2 (and 3.2): (max K_i − min K_i) / K, in %.
 
     Uses the rounds of :func:`scale_factor`; needs at least two rounds (one
-    round has no variation to speak of, so it is reported as not measured).
+    round has no variation to speak of, so it is reported as not measured) and every round
+    of the programme ``programme_deg`` (the 7.1 angles; :func:`nonlinearity_missing_rounds`).
 
     Examples
     --------
@@ -312,6 +349,9 @@ def scale_factor_nonlinearity(sf: Characteristic) -> Characteristic:
     k_i = sf.table["K_i_counts_per_deg"].to_numpy(dtype=float)
     if len(k_i) < 2:
         return _not_measured(name, "needs at least 2 scale_factor rounds, file has 1")
+    why = nonlinearity_missing_rounds(sf.table["table_deg"], programme_deg)
+    if why:
+        return _not_measured(name, why)
     k = float(sf.value)
     table = sf.table[["series", "round", "table_deg", "K_i_counts_per_deg"]].copy()
     table["deviation_pct"] = (k_i - k) / k * 100.0
@@ -958,7 +998,8 @@ def compute_characteristics(readings: Readings | pd.DataFrame, *,
                             reference_rate_dps: float = 60.0,
                             reference_orientation: str = "up",
                             nominal_scale_factor_counts_per_deg: float | None = None,
-                            rates_dps=None, orientations=None) -> CalibrationResults:
+                            rates_dps=None, orientations=None,
+                            scale_factor_deg=None) -> CalibrationResults:
     """All seven characteristics of draft clause 7 from one readings file.
 
     Counts are turned into angles with K from 7.1 when the file has
@@ -970,6 +1011,8 @@ def compute_characteristics(readings: Readings | pd.DataFrame, *,
     the protocol's, the draft's default programme when none is named); a condition of them
     without a reading makes the item not measured (:func:`consistency_missing_conditions`).
     None: the conditions read are the programme (the items without a protocol).
+    ``scale_factor_deg``: the programme's 7.1 angles, K_l's rounds
+    (:func:`nonlinearity_missing_rounds`); None: the rounds read.
 
     Examples
     --------
@@ -1002,7 +1045,7 @@ def compute_characteristics(readings: Readings | pd.DataFrame, *,
         sf = scale_factor(df)
     except GonioError as exc:
         raise GonioError(exc.message, file=file, line=exc.line, column=exc.column) from None
-    nl = scale_factor_nonlinearity(sf)
+    nl = scale_factor_nonlinearity(sf, scale_factor_deg)
     if sf.measured:
         k, k_src = sf.value, "7.1"
     elif nominal_scale_factor_counts_per_deg is not None:

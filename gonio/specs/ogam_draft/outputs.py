@@ -19,7 +19,8 @@ from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
-from gonio.result.findings import UNREAD_CODE
+from gonio.report.i18n import finding_text, labels
+from gonio.result.findings import stated_findings
 from gonio.result.model import Result
 from gonio.result.statement import signed_text
 from gonio.result.tables import results_json_text, write_tables
@@ -152,9 +153,24 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     unc = d["extra"]["uncertainty"]
     if unc.get("measured"):
         lines += [f"note: {n}" for n in unc.get("notes") or []]
-    lines += [f"flagged: {f.location()}: {f.message}" for f in result.findings
-              if f.code in ("identity-mismatch", UNREAD_CODE)]  # against the lab file; unread
+    lines += finding_lines(d.get("findings"))
     return "\n".join(lines) + "\n"
+
+
+def finding_lines(findings) -> list[str]:
+    """Every finding the certificate states (:func:`gonio.result.findings.stated_findings`:
+    all but the refused ones, those about the whole file first), each as the English
+    certificate's line (:func:`gonio.report.i18n.finding_text`) after ``finding: `` —
+    summary.txt lists all of them, where the certificate stops after its first few.
+
+    >>> finding_lines([{"code": "incomplete-programme", "action": "flagged", "clause": "7.1",
+    ...                 "message": "the item rests on 5 of the programme's 6 rounds"},
+    ...                {"code": "x", "action": "refused", "message": "not stated"}])
+    ["finding: [flagged] 7.1: the item rests on 5 of the programme's 6 rounds"]
+    """
+    en = labels("en")
+    return [f"finding: {finding_text(f if isinstance(f, dict) else f.to_json(), en)}"
+            for f in stated_findings(findings)]
 
 
 def write_outputs(result: Result, out: str | Path, *, truth: dict | None = None,

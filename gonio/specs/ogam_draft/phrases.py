@@ -213,6 +213,12 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading",
      "{1}（{2}）：校准方案的测量条件 {3} °/s、{4}轴没有读数"),
     (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
+     r"series; K rests on (\d+) of the programme's (\d+) rounds \(its table bound over all "
+     r"(\d+)\); K_l is not stated \(7\.2 is the range over every round of the programme\)",
+     "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；K 仅依据校准方案 {8} "
+     "个测回中的 {7} 个（其转台误差限按全部 {9} 个测回计算）；K_l 不予给出（7.2 为校准方案"
+     "全部测回上的极差）"),
+    (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
      r"series; the item rests on (\d+) of the programme's (\d+) rounds",
      "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；该项目仅依据校准方案 {8} "
      "个测回中的 {7} 个"),
@@ -249,6 +255,11 @@ REASONS_ZH: tuple[tuple[str, str], ...] = (
      r"condition\)",
      "{1} 要求在校准方案的每个测量条件下比较 E：{2} 没有读数（校准方案 {4} 个测量条件中仅读得 "
      "{3} 个）；不以较少的测量条件给出结果（请补测缺失的测量条件）"),
+    (r"7\.2 is the range of K_i over every round of the programme: (.+) deg has no reading "
+     r"\((\d+) of (\d+) rounds read\); not stated from fewer rounds \(read the missing "
+     r"round\)",
+     "7.2 为校准方案全部测回上 K_i 的极差：{1}° 没有读数（校准方案 {3} 个测回中仅读得 {2} 个）；"
+     "不以较少的测回给出结果（请补测缺失的测回）"),
     (r"(.+) lacks (.+) deg \((\d+) of (\d+) positions\)", "{1} 缺少 {2}°（{4} 个位置中仅有 {3} 个）"),
     (r"(\S+) deg/s, axis (\w+)", "{1} °/s，{2}轴"),
     (r"(\S+) deg/s", "{1} °/s"),
@@ -447,6 +458,14 @@ LABELS: dict[str, dict[str, str]] = {
                             "U = {U}″, k = {k}, coverage probability {p}",
                       "zh": "各测量点 E_i 的测量不确定度（取各点中最大者）：U = {U}″，k = {k}，"
                             "包含概率{p}"},
+    "U_line_points_bound": {
+        "en": "Uncertainty of each point's E_i (the largest of the points', at {pos}°): "
+              "U = k·u + b = {U}″ (k = {k} on u = {u}″ of the lines other than the table's, "
+              "plus the table's bound b = {b}″ at the point, which holds every table within "
+              "the MPE), coverage probability {p}",
+        "zh": "各测量点 E_i 的测量不确定度（取各点中最大者，位于 {pos}°）：U = k·u + b = {U}″"
+              "（k = {k}，u = {u}″ 为转台以外各分量的合成；b = {b}″ 为该点转台误差的界，"
+              "对最大允许误差内的任何转台成立），包含概率{p}"},
     "U_line_one_budget": {"en": "Uncertainty of each point's E_i (the draft's one Annex A budget, "
                                 "the same at every point): U = {U}″, k = {k}, coverage "
                                 "probability {p}",

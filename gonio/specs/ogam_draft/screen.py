@@ -1044,6 +1044,11 @@ def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
                          f"programme's {len(it.rounds)} rounds" if test not in COMPARED else
                          f"the item is not stated ({CLAUSES[test]} compares every condition "
                          "over the same positions)")
+                if test == "scale_factor":     # K_l: items.nonlinearity_missing_rounds
+                    rests = (f"K rests on {len(it.rounds) - len(missing)} of the programme's "
+                             f"{len(it.rounds)} rounds (its table bound over all "
+                             f"{len(it.rounds)}); K_l is not stated (7.2 is the range over "
+                             "every round of the programme)")
                 out.append(Finding(
                     "incomplete-programme",
                     f"{test} ({CLAUSES[test]}) at {cond}: round {i} ({r.stop_deg - r.start_deg:g}°)"
