@@ -460,12 +460,12 @@ LABELS: dict[str, dict[str, str]] = {
                             "包含概率{p}"},
     "U_line_points_bound": {
         "en": "Uncertainty of each point's E_i (the largest of the points', at {pos}°): "
-              "U = k·u + b = {U}″ (k = {k} on u = {u}″ of the lines other than the table's, "
-              "plus the table's bound b = {b}″ at the point, which holds every table within "
-              "the MPE), coverage probability {p}",
-        "zh": "各测量点 E_i 的测量不确定度（取各点中最大者，位于 {pos}°）：U = k·u + b = {U}″"
-              "（k = {k}，u = {u}″ 为转台以外各分量的合成；b = {b}″ 为该点转台误差的界，"
-              "对最大允许误差内的任何转台成立），包含概率{p}"},
+              "U = {U}″, k = {k}, coverage probability {p} (U = k·u + b: k times u = {u}″ of "
+              "the lines other than the table's, plus the table's bound b = {b}″ at the point, "
+              "which holds every table within the MPE)",
+        "zh": "各测量点 E_i 的测量不确定度（取各点中最大者，位于 {pos}°）：U = {U}″，k = {k}，"
+              "包含概率{p}（U = k·u + b：u = {u}″ 为转台以外各分量的合成；b = {b}″ 为该点转台"
+              "误差的界，对最大允许误差内的任何转台成立）"},
     "U_line_one_budget": {"en": "Uncertainty of each point's E_i (the draft's one Annex A budget, "
                                 "the same at every point): U = {U}″, k = {k}, coverage "
                                 "probability {p}",

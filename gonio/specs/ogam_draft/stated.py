@@ -540,13 +540,13 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             lines += ["", f"Uncertainty of each point's E_i (the largest of the points', at "
                           f"{u['U_position_deg']:g}°) ({kind}): "
                           f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
-                          f"U = k·u + b = {num(res, 'extra.uncertainty.U_arcsec', 'U')}″ "
-                          f"(k = {num(res, 'extra.uncertainty.k', 'k')} on u = "
+                          f"U = {num(res, 'extra.uncertainty.U_arcsec', 'U')}″ "
+                          f"(k = {num(res, 'extra.uncertainty.k', 'k')}, coverage probability "
+                          f"{coverage_text(ANNEX_A_COVERAGE, lang)}; U = k·u + b: k times u = "
                           f"{num(res, 'extra.uncertainty.u_without_table_arcsec', 'U')}″ of "
                           f"the lines other than the table's, plus the table's bound b = "
                           f"{num(res, 'extra.uncertainty.table_bound_arcsec', 'U')}″ at the "
-                          f"point, every table within the MPE; coverage probability "
-                          f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
+                          f"point, every table within the MPE)"]
         else:
             lines += ["", f"Uncertainty of {what} ({kind}): "
                           f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
