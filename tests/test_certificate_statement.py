@@ -173,7 +173,9 @@ def test_summary_and_certificate_use_the_same_numbers(run):
     # U to two significant digits, the same in both; u_c not "0.2″" beside "0.20″"
     U = res["extra"]["uncertainty"]["U_arcsec"]
     uc = res["extra"]["uncertainty"]["u_c_arcsec"]
-    assert f"U = {half_up(U, u_decimals(U))}″" in summary
+    # the per-point U stated (with the table's bound, U = k·u + b, where the points carry it)
+    Us = res["extra"]["uncertainty"].get("U_bound_arcsec") or U
+    assert f"U = {half_up(Us, u_decimals(Us))}″" in summary
     assert f"u_c = {half_up(uc, u_decimals(uc))}″" in summary
     # R shown at E's decimal place everywhere (figure legend included)
     R = half_up(res["items"]["repeatability"]["value"], u_decimals(U))

@@ -147,20 +147,20 @@ def test_e_per_point_u_holds_the_corner_table(typo):
 
     _, res, out = typo
     unc = res["clean"]["extra"]["uncertainty"]
-    best = max(unc["points"], key=lambda p: p["U_arcsec"])
+    best = max(unc["points"], key=lambda p: p["U_bound_arcsec"])
     for p in unc["points"]:
         b, u = p["table_bound_arcsec"], p["u_without_table_arcsec"]
         nu = p["nu_without_table"]
         k = norm.ppf(0.975) if nu is None or nu > 1000 else t.ppf(0.975, int(nu))
-        assert p["U_arcsec"] == pytest.approx(k * u + b, rel=1e-9)
-        hold = norm.cdf((p["U_arcsec"] - b) / u) - norm.cdf((-p["U_arcsec"] - b) / u)
-        assert hold >= 0.95 - 1e-9, p
-        old = p["U_positions_independent_arcsec"]
+        U = p["U_bound_arcsec"]
+        assert U == pytest.approx(k * u + b, rel=1e-9)
+        assert norm.cdf((U - b) / u) - norm.cdf((-U - b) / u) >= 0.95 - 1e-9, p
+        old = p["U_arcsec"]               # the table at MPE/√3 per position, beside
         if p["position_deg"] == 360.0:
             assert norm.cdf((old - b) / u) - norm.cdf((-old - b) / u) < 0.5
-    assert unc["U_arcsec"] == best["U_arcsec"] and unc["k"] == best["k"]
+    assert unc["U_bound_arcsec"] == best["U_bound_arcsec"] and unc["k_bound"] == best["k_bound"]
     assert unc["U_position_deg"] == best["position_deg"]
-    text = f"{unc['U_arcsec']:.2f}″"
+    text = f"{unc['U_bound_arcsec']:.2f}″"
     summary = (out / "clean" / "summary.txt").read_text(encoding="utf-8")
     line = next(x for x in summary.splitlines() if x.startswith("Uncertainty of each point"))
     assert f"U = {text} (k = " in line and "U = k·u + b" in line

@@ -366,27 +366,23 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
 
 def e_point_statement(points) -> dict:
     """``extra.uncertainty``'s per-point statement where the points carry the table's bound
-    (:func:`gonio.specs.ogam_draft.calibration.point_u_with_bound`): ``U_arcsec`` the
-    largest U_i = k·u_i + b_i, its ``k``,
-    ``table_bound_arcsec`` b_i, ``u_without_table_arcsec`` u_i and ``U_position_deg``, and
-    ``U_positions_independent_arcsec`` the largest U_i of the table line at MPE/√3 per
-    position (beside, not stated); {} where no point has a bound (a calibrated table, the
-    draft's one budget).
+    (:func:`gonio.specs.ogam_draft.calibration.point_u_with_bound`): ``U_bound_arcsec`` the
+    largest U_i = k·u_i + b_i (the stated per-point U), its ``k_bound``,
+    ``table_bound_arcsec`` b_i, ``u_without_table_arcsec`` u_i and ``U_position_deg``; {}
+    where no point has a bound (a calibrated table, the draft's one budget). ``U_arcsec`` and
+    ``k`` stay the budget's own (the table line at MPE/√3 per position), beside.
 
-    >>> e_point_statement([{"position_deg": 30.0, "U_arcsec": 0.3, "k": 1.96,
-    ...     "table_bound_arcsec": 0.1, "u_without_table_arcsec": 0.1,
-    ...     "U_positions_independent_arcsec": 0.25}])["U_position_deg"]
+    >>> e_point_statement([{"position_deg": 30.0, "U_bound_arcsec": 0.3, "k_bound": 1.96,
+    ...     "table_bound_arcsec": 0.1, "u_without_table_arcsec": 0.1}])["U_position_deg"]
     30.0
     >>> e_point_statement([{"position_deg": 30.0, "U_arcsec": 0.3, "k": 1.96}])
     {}
     """
-    pts = [p for p in points or () if p.get("table_bound_arcsec") is not None]
+    pts = [p for p in points or () if p.get("U_bound_arcsec") is not None]
     if not pts:
         return {}
-    w = max(pts, key=lambda p: p["U_arcsec"])
-    return {"U_arcsec": w["U_arcsec"], "k": w["k"],
+    w = max(pts, key=lambda p: p["U_bound_arcsec"])
+    return {"U_bound_arcsec": w["U_bound_arcsec"], "k_bound": w["k_bound"],
             "table_bound_arcsec": w["table_bound_arcsec"],
             "u_without_table_arcsec": w["u_without_table_arcsec"],
-            "U_position_deg": w["position_deg"],
-            "U_positions_independent_arcsec": max(p["U_positions_independent_arcsec"]
-                                                  for p in pts)}
+            "U_position_deg": w["position_deg"]}

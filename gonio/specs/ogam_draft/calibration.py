@@ -1150,7 +1150,6 @@ def _with_table_bounds(points, pos, budgets, stops, mpe_arcsec: float, programme
     if any(b > 0 for b in bounds[0]):
         points = tuple(dict(d, table_bound_arcsec=b, u_without_table_arcsec=u,
                             nu_without_table=None if math.isinf(n) else n,
-                            U_positions_independent_arcsec=d["U_arcsec"],
                             **point_u_with_bound(b, u, n))
                        for d, b, u, n in zip(points, *bounds))
     return points, bounds
@@ -1164,16 +1163,17 @@ def point_u_with_bound(b_arcsec: float, u_arcsec: float, nu: float) -> dict:
     P(|ε| ≤ k·u_i) = 95 % (JCGM 100 4.3.7 for δ, as E's extreme takes it,
     :func:`e_max_interval`); the table line at MPE/√3 per position (positions independent)
     does not hold the corner table (b = 0.457″ at 360° where that U was 0.36″). Its k is the
-    one of u_i.
+    one of u_i. Each point's ``U_arcsec``/``k`` stay the table line's at MPE/√3 per position
+    (positions independent; E_i's decimals follow them), beside, not stated.
 
     >>> d = point_u_with_bound(0.457, 0.1, math.inf)
-    >>> round(d["U_arcsec"], 4), round(d["k"], 2)
+    >>> round(d["U_bound_arcsec"], 4), round(d["k_bound"], 2)
     (0.653, 1.96)
     """
     from gonio.result.statement import coverage_k
 
     k = coverage_k(nu)
-    return {"U_arcsec": float(k * u_arcsec + b_arcsec), "k": float(k)}
+    return {"U_bound_arcsec": float(k * u_arcsec + b_arcsec), "k_bound": float(k)}
 
 
 def _point_table_bounds(pos, budgets, stops, mpe_arcsec: float, programme_stops=None):

@@ -109,8 +109,9 @@ def _e_u_line(res: dict, unc: dict, L: dict, U: float, lang: str, by_iv: bool, o
     more = dict(u=_num(res, "extra.uncertainty.u_without_table_arcsec", "U", U),
                 b=_num(res, "extra.uncertainty.table_bound_arcsec", "U", U),
                 pos=f"{unc['U_position_deg']:g}") if bound else {}
-    return segments(L[key], U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
-                    k=_num(res, "extra.uncertainty.k", "k", U),
+    pre = "extra.uncertainty." + ("U_bound_arcsec" if bound else "U_arcsec")
+    return segments(L[key], U=_num(res, pre, "U", U),
+                    k=_num(res, "extra.uncertainty." + ("k_bound" if bound else "k"), "k", U),
                     p=coverage_text(ANNEX_A_COVERAGE, lang), **more)
 
 

@@ -148,7 +148,9 @@ def budget(d: dict) -> dict:
     return {"components": [{"symbol": c["symbol"], "type": c["type"],
                             "contribution_arcsec": c["contribution_arcsec"]}
                            for c in d["components"]],
-            "u_c_arcsec": d["u_c_arcsec"], "U_arcsec": d["U_arcsec"]}
+            "u_c_arcsec": d["u_c_arcsec"],
+            "U_arcsec": d["U_bound_arcsec"] if d.get("U_bound_arcsec") is not None
+            else d["U_arcsec"]}
 
 
 def figure_series(results, e_budget) -> dict:
