@@ -733,7 +733,7 @@ def import_day() -> _dt.date:
     records' times — never a file's modification time, which anyone can set (``touch -d``)
     and which would choose the standards and the table calibration in force on that day
     (docs/records.md, importing an output folder)."""
-    return services.utcnow().date()
+    return services.records_today()
 
 
 def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,

@@ -34,6 +34,32 @@ def utcnow() -> _dt.datetime:
     return _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None)
 
 
+def records_today() -> _dt.date:
+    """The records' "today": the UTC date, as every time the records hold is UTC
+    (:func:`utcnow`). The one day every rule and page of the records compares a date with —
+    a standard's or table calibration's due date when it is registered or edited
+    (:func:`is_past_due`), the overdue marks of the web lists, the due list and recall, a
+    calibration date not in the future, the register's "today" — so that no page marks
+    overdue what a service accepted as in time, or the reverse, in the hours where the
+    laboratory's local date and the UTC date differ (00:00–08:00 in Beijing)."""
+    return utcnow().date()
+
+
+def is_past_due(due: _dt.date, today: _dt.date | None = None) -> bool:
+    """Whether equipment due on ``due`` is past its due date on ``today`` (default
+    :func:`records_today`): due strictly before it. A standard due today is in time
+    (ISO/IEC 17025 6.4.7: it may be used on its due date); the one rule of registering,
+    editing and the lists' "overdue".
+
+    >>> import datetime as dt
+    >>> is_past_due(dt.date(2026, 12, 1), dt.date(2026, 12, 1))
+    False
+    >>> is_past_due(dt.date(2026, 11, 30), dt.date(2026, 12, 1))
+    True
+    """
+    return due < (records_today() if today is None else today)
+
+
 class Base(DeclarativeBase):
     pass
 
@@ -144,9 +170,10 @@ class Standard(Base):
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
     #: retired (no new calibration uses it; its history stays); None: in use
     retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
-    #: registered already past its due date: the reason stated (registered out of service:
-    #: refused in use until its recalibration is recorded;
-    #: :func:`gonio.records.services.add_standard`); "" registered in time
+    #: registered, or given a due date by an edit, already past its due date: the reason
+    #: stated (out of service: refused in use until its recalibration is recorded;
+    #: :func:`gonio.records.services.add_standard`, :func:`~gonio.records.services.
+    #: update_standard`); "" registered in time
     out_of_service: Mapped[str] = mapped_column(Text, default="", server_default="")
 
 

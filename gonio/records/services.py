@@ -44,7 +44,8 @@ from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
                                   Instrument, ResultItem, Setting, Standard, TableCalibration,
-                                  TableCalibrationWithdrawal, User, utcnow)
+                                  TableCalibrationWithdrawal, User, is_past_due,
+                                  records_today, utcnow)
 from gonio.records.results import NOT_STATED, result_rows
 
 #: The certificate numbering scheme: prefix, year, four-digit sequence per year.
@@ -522,7 +523,7 @@ def past_due(what: str, due: _dt.date, today: _dt.date, reason: str, how: str) -
     gonio.errors.GonioError: key due_on: standard RT-07 was due on 2025-01-01, before today (2026-12-01): equipment past its due date is registered only with the reason stated (--out-of-service)
     """
     reason = text(reason, "reason", max_len=MAX_TEXT)
-    if due >= today:
+    if not is_past_due(due, today):
         return ""
     if not reason:
         raise GonioError(f"{what} was due on {due}, before today ({today}): equipment past its "
@@ -547,7 +548,7 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   traceability=text(traceability, "traceability"),
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
-    today = utcnow().date()
+    today = records_today()
     st.out_of_service = past_due(f"standard {st.identifier}", st.due_on, today,
                                  out_of_service or "",
                                  "register it out of service with the reason: --out-of-service "
@@ -564,7 +565,7 @@ def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire
     transaction. ``unique(obj)``: a statement matching another row that would clash
     (refused with ``message``)."""
     if retire is not None:
-        values["retired_on"] = utcnow().date() if retire else None
+        values["retired_on"] = records_today() if retire else None
     with store.writing() as s:
         obj = s.get(model, int(obj_id))
         if obj is None:
@@ -635,10 +636,14 @@ def update_instrument(store, actor: User, instrument_id: int, *, customer_id=Non
 
 def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy=None,
                     certificate=None, traceability=None, calibrated_on=None, due_on=None,
-                    retire: bool | None = None) -> Standard:
+                    retire: bool | None = None, out_of_service: str | None = None) -> Standard:
     """Record a standard's recalibration (its new certificate, calibration and due date: the
     audit trail keeps every earlier one), correct its details, retire it or bring it back
-    (technician)."""
+    (technician). A due date set already past (:func:`past_due`, on :func:`records_today`,
+    the rule of :func:`add_standard`) is refused unless ``out_of_service`` states why: the
+    standard is then out of service with that reason (no calibration can use it while its
+    due date is past, :func:`unusable_standard`); a new due date not past puts it in use
+    and clears the reason (the audit trail keeps it)."""
     require(actor, "technician")
     values = {k: text(v, k) for k, v in _given(accuracy=accuracy, certificate=certificate,
                                                traceability=traceability).items()}
@@ -649,6 +654,15 @@ def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy
     if values.get("calibrated_on") and values.get("due_on") and \
             values["due_on"] < values["calibrated_on"]:
         raise GonioError("the due date is before the calibration date", key="due_on")
+    if values.get("due_on"):
+        with store.session() as s:
+            st = s.get(Standard, standard_id)
+            ident = st.identifier if st is not None else str(standard_id)
+            same = st is not None and st.due_on == values["due_on"]
+        if not same:     # a new due date: out of service with its reason, or in time
+            values["out_of_service"] = past_due(
+                f"standard {ident}", values["due_on"], records_today(), out_of_service or "",
+                "state why it is out of service: the edit form's 'Out of service' field")
     return _update(store, actor, Standard, standard_id, "standard", values, retire)
 
 
@@ -747,7 +761,7 @@ def submission_fields(performed_on, received_on, standard_ids, temperature_c, hu
     ...
     gonio.errors.GonioError: key standards: tick the reference standard(s) used: a calibration names at least one registered standard (its traceability)
     """
-    day = date_value(performed_on, "performed_on") or _dt.date.today()
+    day = date_value(performed_on, "performed_on") or records_today()
     received = date_value(received_on, "received_on")
     plausible_dates(day, received)
     ids = sorted({int(i) for i in standard_ids})
@@ -1238,7 +1252,7 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     shown = file_name(name, "table calibration file name")
     cert = text(certificate, "certificate")
     with store.writing() as s:
-        check_table_dates(start, due, table_interval_months(s), utcnow().date())
+        check_table_dates(start, due, table_interval_months(s), records_today())
         st = s.get(Standard, int(standard_id), with_for_update=True)
         if st is None:
             raise GonioError("no such standard (register the rotary table as a standard "
@@ -1601,7 +1615,7 @@ def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
     (:func:`pending_withdrawal`) or None}``; today is the UTC date (the records keep UTC)."""
     from sqlalchemy.orm import selectinload
 
-    day = day or utcnow().date()
+    day = day or records_today()
     with store.session() as s:
         rows = s.scalars(select(TableCalibration).options(
             selectinload(TableCalibration.standard), selectinload(TableCalibration.registered_by))
@@ -1745,7 +1759,7 @@ def unusable_standard(st: Standard, day: _dt.date) -> str:
     if st.retired_on is not None and st.retired_on <= day:
         return f"standard {st.identifier} was retired on {st.retired_on} (the calibration " \
                f"date is {day})"
-    if st.due_on < day:
+    if is_past_due(st.due_on, day):
         why = getattr(st, "out_of_service", "")
         return f"standard {st.identifier} was due on {st.due_on} (before the calibration " \
                f"date {day}): calibrate it first" + (
@@ -1955,7 +1969,7 @@ def plausible_dates(performed: _dt.date, received: _dt.date | None,
     ...
     gonio.errors.GonioError: key performed_on: 9999-12-31 is in the future (today 2026-01-01)
     """
-    today = today or _dt.date.today()
+    today = today or records_today()
     if performed > today:
         raise GonioError(f"{performed} is in the future (today {today})", key="performed_on")
     if received is not None and received > performed:
@@ -2445,7 +2459,7 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
                            "accreditation": cfg["lab_accreditation"],
                            "contact": cfg["lab_contact"]},
             "certificate": {"number": number,
-                            "date_of_issue": utcnow().date().isoformat() if final else "",
+                            "date_of_issue": records_today().isoformat() if final else "",
                             "date_of_receipt": cal.received_on.isoformat()
                             if cal.received_on else "",
                             "date_of_calibration": cal.performed_on.isoformat(),
@@ -2880,7 +2894,7 @@ def due_instruments(store, today: _dt.date | None = None, within_days: int = 30)
     """Instruments in use (not retired) due for recalibration within ``within_days`` or
     overdue: the last issued calibration's date plus the instrument's interval (else the
     specification's default)."""
-    today = today or _dt.date.today()
+    today = today or records_today()
     with store.session() as s:
         last = dict(s.execute(       # issued: it has a certificate (also while amended)
             select(Calibration.instrument_id, func.max(Calibration.performed_on))

@@ -74,10 +74,19 @@ def virtual_tag(ctx, readings_sha256: str | None) -> str:
     return labels("en")["virtual"]
 
 
+def past_due(due: _dt.date, today: _dt.date | None = None) -> bool:
+    """The lists' "overdue" mark: :func:`gonio.records.models.is_past_due`, the rule the
+    services register and edit standards by, on the records' today."""
+    from gonio.records.models import is_past_due
+
+    return is_past_due(due, today)
+
+
 def templates() -> Jinja2Templates:
     """The pages' template environment (autoescaped), with the globals every page uses."""
     t = Jinja2Templates(directory=str(HERE / "templates"))
-    t.env.globals.update(fmt=fmt, STATES=STATES, virtual_tag=virtual_tag)
+    t.env.globals.update(fmt=fmt, STATES=STATES, virtual_tag=virtual_tag,
+                         past_due=past_due)
     return t
 
 

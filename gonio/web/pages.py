@@ -14,6 +14,7 @@ from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
+from gonio.records.models import records_today
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, Session,
                               file_response, form, page_of, render, wake)
 from gonio.web.front import STATES, login_response
@@ -86,7 +87,7 @@ def dashboard(request: Request, session: Session):
     due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
                   due=due, n_due=n_due, review=review, approve=approve,
-                  active=active, n_active=n_active, failed=failed, today=_dt.date.today())
+                  active=active, n_active=n_active, failed=failed, today=records_today())
 
 
 # --------------------------------------------------------------------------- customers
@@ -142,7 +143,8 @@ async def customer_edit(request: Request, session: Session, cust_id: int):
 async def standard_edit(request: Request, session: Session, std_id: int):
     return await _edit(request, session, "/standards", lambda u, d: services.update_standard(
         _store(request), u, std_id, **{k: d.get(k) for k in (
-            "name", "accuracy", "certificate", "traceability", "calibrated_on", "due_on")},
+            "name", "accuracy", "certificate", "traceability", "calibrated_on", "due_on",
+            "out_of_service")},
         retire=_retire_of(d)))
 
 
@@ -292,7 +294,7 @@ def due_page(request: Request, session: Session):
     query = urlencode({k: v for k, v in filters.items() if v})
     return render(request, "due.html", user, csrf, rows=rows, total=total, page=page,
                   size=PAGE, f=filters, windows=DUE_WINDOWS, query=query,
-                  extra="&" + query if query else "", today=_dt.date.today())
+                  extra="&" + query if query else "", today=records_today())
 
 
 @router.get("/due/recall")
@@ -300,7 +302,7 @@ def recall_page(request: Request, session: Session):
     """The recall notices, one printed page per customer (the print stylesheet)."""
     user, csrf = session
     filters = _due_filters(request)
-    return render(request, "recall.html", user, csrf, today=_dt.date.today(),
+    return render(request, "recall.html", user, csrf, today=records_today(),
                   notices=queries.recall(_store(request), filters["customer"],
                                          filters["within_days"]),
                   f=filters, lab=services.settings(_store(request)))
@@ -319,14 +321,14 @@ def standard_page(request: Request, session: Session, std_id: int):
     tables = [r for r in services.table_calibrations(_store(request))
               if r["entry"].standard_id == std_id]
     return render(request, "standard.html", user, csrf, **d, page=page, size=PAGE,
-                  today=_dt.date.today(), table_calibrations=tables)
+                  today=records_today(), table_calibrations=tables)
 
 
 @router.get("/standards")
 def standards_page(request: Request, session: Session):
     user, csrf = session
     return render(request, "standards.html", user, csrf, standards=queries.standards(
-        _store(request)), today=_dt.date.today(),
+        _store(request)), today=records_today(),
         error=request.query_params.get("error", "")[:300])
 
 
@@ -340,7 +342,7 @@ async def standards_add(request: Request, session: Session):
             "traceability", "out_of_service")})
     except GonioError as exc:
         return render(request, "standards.html", user, csrf, status_code=400, error=str(exc),
-                      standards=queries.standards(_store(request)), today=_dt.date.today())
+                      standards=queries.standards(_store(request)), today=records_today())
     return _back("/standards")
 
 
@@ -354,7 +356,7 @@ def _register_page(request, user, csrf, status_code=200, error=""):
         day = services.date_value(request.query_params.get("date", "")[:20], "date")
     except GonioError as exc:
         day, error = None, error or str(exc)
-    today = services.utcnow().date()                 # the records' dates are UTC
+    today = records_today()                 # the records' dates are UTC
     day = day or today
     return render(request, "table_calibrations.html", user, csrf, status_code=status_code,
                   error=error, rows=services.table_calibrations(store, day),
@@ -462,7 +464,7 @@ def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
                   register=services.table_calibrations(store),
-                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked,
+                  specs=list(available()), today=records_today(), v=entered, ticked=ticked,
                   kept=kept or {}, reuse=reuse or bool(entered.get("reuse_reason")),
                   limit=blobs.size_text(services.MAX_UPLOAD))
 
@@ -791,7 +793,7 @@ def export_csv(request: Request, session: Session, name: str):
     got = queries.export_rows(_store(request), name, params)
     if got is None:
         return Response("no such list", status_code=404)
-    stamp = _dt.date.today().isoformat()
+    stamp = records_today().isoformat()
     return Response(csv_text(*got), media_type="text/csv; charset=utf-8", headers={
         "Content-Disposition": f'attachment; filename="gonio-{name}-{stamp}.csv"'})
 

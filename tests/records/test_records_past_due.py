@@ -108,3 +108,81 @@ def test_add_standard_past_due_in_python(sqlite_store):
                              due_on=TODAY + dt.timedelta(days=365))
     assert services.create_calibration(store, tech, standard_ids=[st.id], **base,
                                        readings_sha256=readings()).id
+
+
+def test_update_standard_past_due_follows_the_add_rule(sqlite_store):
+    """Editing a standard's due date into the past is refused, as registering one past due
+    is, unless the reason is stated: then it is out of service with it and refused by a
+    calibration after its due date; a later due date in time puts it back in use."""
+    store = sqlite_store
+    tech = make_people(store)["tech"]
+    st = services.add_standard(store, tech, name="table", identifier="RT-09",
+                               due_on=TODAY + dt.timedelta(days=100))
+    late = TODAY - dt.timedelta(days=2)
+    with pytest.raises(GonioError, match=f"standard RT-09 was due on {late}, before today "
+                                         rf"\({TODAY}\).*'Out of service'"):
+        services.update_standard(store, tech, st.id, due_on=late)
+    assert standards_of(store)["RT-09"] == (TODAY + dt.timedelta(days=100), "", None)
+    # a blank reason is no reason
+    with pytest.raises(GonioError, match="RT-09 was due on"):
+        services.update_standard(store, tech, st.id, due_on=late, out_of_service="  ")
+    services.update_standard(store, tech, st.id, due_on=late, out_of_service=" lost seal ")
+    assert standards_of(store)["RT-09"] == (late, "lost seal", None)
+    with store.session() as s:
+        assert services.unusable_standard(s.get(Standard, st.id), TODAY).endswith(
+            "(registered out of service: lost seal)")
+    # other details edited, the due date unchanged: no new reason asked
+    services.update_standard(store, tech, st.id, accuracy="1 arcsec", due_on=late)
+    # recalibrated: in time again, the reason cleared (the audit trail keeps it)
+    services.update_standard(store, tech, st.id, due_on=TODAY)
+    assert standards_of(store)["RT-09"] == (TODAY, "", None)
+
+
+def standards_of(store) -> dict:
+    with store.session() as s:
+        return {x.identifier: (x.due_on, x.out_of_service, x.retired_on)
+                for x in s.scalars(select(Standard))}
+
+
+def test_one_today_for_services_and_pages(sqlite_store, monkeypatch):
+    """The records' "today" is one day for the services and the web pages: at 23:30 UTC on
+    2026-11-30 (07:30 on 2026-12-01 in Beijing) a standard due on 2026-11-30 is in time for
+    add_standard, update_standard and the lists' overdue mark alike."""
+    from gonio.records import models
+    from gonio.web import front
+    monkeypatch.setattr(models, "utcnow", lambda: dt.datetime(2026, 11, 30, 23, 30))
+    monkeypatch.setenv("TZ", "Asia/Shanghai")
+    import time
+    if hasattr(time, "tzset"):
+        time.tzset()
+    try:
+        store = sqlite_store
+        tech = make_people(store)["tech"]
+        due = dt.date(2026, 11, 30)
+        assert models.records_today() == due
+        st = services.add_standard(store, tech, name="level", identifier="LV-9", due_on=due)
+        assert st.out_of_service == ""
+        assert not front.past_due(due, models.records_today())
+        services.update_standard(store, tech, st.id, due_on=due - dt.timedelta(days=1),
+                                 out_of_service="sent away")
+        assert front.past_due(due - dt.timedelta(days=1), models.records_today())
+    finally:
+        monkeypatch.delenv("TZ")
+        if hasattr(time, "tzset"):
+            time.tzset()
+
+
+def test_no_other_today_in_the_records_and_pages():
+    """No module of the records or the web pages takes "today" from the local clock
+    (date.today(), a naive now()): every one is models.records_today()."""
+    import re
+    from pathlib import Path
+
+    import gonio
+    root = Path(gonio.__file__).parent
+    bad = []
+    for f in sorted([*root.glob("records/**/*.py"), *root.glob("web/**/*.py")]):
+        for i, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1):
+            if re.search(r"date\.today\(\)|datetime\.now\(\)", line):
+                bad.append(f"{f.relative_to(root)}:{i}: {line.strip()}")
+    assert not bad, "\n".join(bad)
