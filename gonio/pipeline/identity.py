@@ -6,7 +6,9 @@ gyro's ``# gyro_type:``, the
 temperature ``# temperature_c:`` or ``# room_temperature_c:``, ``# humidity_pct:``) are
 compared with the laboratory file's ``[instrument]`` and ``[environment]``: a text that
 differs (compared without regard to case and runs of white space) or a temperature or
-humidity further apart than the tolerance (``[identity]`` ``temperature_tolerance_c``, default
+humidity further apart than the tolerance (both numbers named as written, the
+certificate's :func:`~gonio.report.header.condition_text`: a laboratory file's ``25.0`` is
+"25.0 °C") (``[identity]`` ``temperature_tolerance_c``, default
 :data:`TEMPERATURE_TOLERANCE_C`; ``humidity_tolerance_pct``, default
 :data:`HUMIDITY_TOLERANCE_PCT`) is a contradiction. Where either side is silent nothing is
 compared. A contradiction refuses the calibration with one line (``GonioError``, exit 2)
@@ -26,6 +28,7 @@ from pathlib import Path
 from gonio.errors import GonioError
 from gonio.formats.metadata import parse_number
 from gonio.formats.provenance import readings_metadata
+from gonio.report.header import condition_text
 from gonio.result.findings import IDENTITY_CODE, Finding
 
 #: Default largest difference, °C, between the readings' and the laboratory file's temperature.
@@ -102,8 +105,9 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
         tol = rules.get(tol_key)
         tol = default if tol is None else float(tol)
         if abs(float(theirs) - ours) > tol:
-            out.append({"what": what, "key": k or md_keys[0], "readings": f"{ours:g} {unit}",
-                        "lab": f"{float(theirs):g} {unit}", "lab_key": f"{section}.{key}",
+            out.append({"what": what, "key": k or md_keys[0],
+                        "readings": f"{condition_text(text)} {unit}",
+                        "lab": f"{condition_text(theirs)} {unit}", "lab_key": f"{section}.{key}",
                         "tolerance": f"{tol:g} {unit}", **({"where": where} if where else {})})
     return out
 

@@ -162,7 +162,7 @@ def store_acquisition(store, cal: Calibration, readings: Path, io_log: Path) -> 
             old.sha256 = l_sha
         s.commit()
     check_readings(readings_facts(store, r_sha), cal.instrument, cal.spec_key,
-                   cal.temperature_c, cal.humidity_pct)
+                   *services.environment_shown(cal))      # as entered: "25.0", not 25
     with store.writing() as s:
         row = s.get(Calibration, cal.id)
         services.check_readings_unused(s, r_sha, other_than=row.id)

@@ -72,7 +72,7 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
     with pytest.raises(GonioError, match=f"AC-OLD was due on {day - dt.timedelta(days=1)}"):
         services.attach_conditions(store, people["tech"], cid, standard_ids=[old.id])
     # an environment the readings contradict (they say 20.0 °C)
-    with pytest.raises(GonioError, match=r"temperature: the readings say 20 °C \(# "
+    with pytest.raises(GonioError, match=r"temperature: the readings say 20.0 °C \(# "
                                          r"temperature_c\), entered 26.5 °C"):
         services.attach_conditions(store, people["tech"], cid, temperature_c="26.5",
                                    humidity_pct="40")

@@ -129,7 +129,7 @@ def test_new_flows_on_a_phone(lab, browser, bench_readings, tmp_path):  # noqa: 
     page.set_input_files("input[name=protocol_file]", str(PROTOCOL))
     page.fill("input[name=temperature_c]", "25")
     send(page)
-    assert re.search(r"temperature: the readings say 20 °C .* what was entered 25 °C", alert(page))
+    assert re.search(r"temperature: the readings say 20.0 °C .* what was entered 25 °C", alert(page))
     assert page.locator("b.kept").first.inner_text() == "readings.csv"
     assert page.input_value("input[name=temperature_c]") == "25"
     no_sideways(page)
