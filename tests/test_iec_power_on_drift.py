@@ -28,7 +28,7 @@ def _judge(recs, truth: float, n_ref: int, coef) -> tuple[float, bool]:
     whether the statement (the replicates' 95 % interval, no k) holds the truth; checks the
     reading is the largest contender at most, never below 0, inside its interval, the
     interval's lower end at or above 0 and 1 ≤ m ≤ the records' smoothed values."""
-    val, vals, u, m = I.power_on_drift_budget(recs, n_ref, lambda sep: 0.0, coef)
+    val, vals, u, m, _fit = I.power_on_drift_budget(recs, n_ref, lambda sep: 0.0, coef)
     assert max(vals) >= val >= 0.0 and 1 <= m <= sum(len(r[1]) for r in recs), (val, m)
     lo, hi = u.interval
     assert u.k is None and 0.0 <= lo <= val <= hi, (lo, val, hi)

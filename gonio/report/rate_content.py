@@ -32,10 +32,18 @@ def item_conditions(res: dict, content, lang: str = "en") -> list[tuple[str, str
     the block P and the nominal stability), filled from the item's stored details in
     ``lang`` ("en", "zh"): the certificate, summary.txt and the DCC state the same
     sentences. An item not measured, or whose details lack a field of its sentence (a
-    result stored before the field existed), has none."""
+    result stored before the field existed), has none. An entry may be a function of the
+    item's details and ``lang`` instead (a sentence that depends on a decision stored
+    there, IEC 5.3.3.5's pooling of the power-on records), returning None where the details
+    do not hold it."""
     out = []
     for key, text in content_field(content, "ITEM_CONDITIONS").items():
         it = res["items"].get(key) or {}
+        if callable(text):
+            s = text(it.get("details") or {}, lang) if it.get("measured") else None
+            if s:
+                out.append((key, s))
+            continue
         tmpl = text[1 if lang == "zh" else 0]
         fields = {f for _, f, _, _ in string.Formatter().parse(tmpl) if f}
         if it.get("measured") and fields <= set(it.get("details") or {}):

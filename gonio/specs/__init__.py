@@ -570,11 +570,13 @@ CONTENT_FIELDS: dict[str, tuple[str, Callable[[Any], bool], Any]] = {
              lambda v: _strs(v) and len(v) > 0, None),
     "READINGS_ZH": ("a dict {clause prefix of a reading taken: its Chinese}", _str_dict, {}),
     "ITEM_CONDITIONS": ("a dict {item key: (English, Chinese) templates filled from the "
-                        "item's details}: what defines the item's measurand, stated under "
-                        "the results table where the item was measured and its details hold "
-                        "every field of the sentence",
+                        "item's details, or a function (details, lang) -> the sentence or "
+                        "None}: what defines the item's measurand or how it was evaluated, "
+                        "stated under the results table where the item was measured and its "
+                        "details hold every field of the sentence",
                         lambda v: isinstance(v, dict) and all(
-                            isinstance(k, str) and _strs(t, 2) for k, t in v.items()), {}),
+                            isinstance(k, str) and (_strs(t, 2) or callable(t))
+                            for k, t in v.items()), {}),
     "PHRASES_ZH": ("a tuple of (English regular expression, Chinese) pairs",
                    lambda v: isinstance(v, tuple) and all(_strs(x, 2) for x in v), ()),
     "FIGURE_ITEMS": (f"a dict {{figure role ({', '.join(FIGURE_ROLES)}): item key}}",

@@ -32,6 +32,40 @@ TITLES_ZH = {
     "g_sensitivity": "线性加速度灵敏度", "broadband_noise": "宽带噪声", "resolution": "分辨率",
 }
 
+def _power_on_fit(details: dict, lang: str) -> str | None:
+    """5.3.3.5's pooling decision as the certificate, summary.txt and the DCC state it, from
+    the item's details (:func:`gonio.specs.iec62047_20.items.power_on_fit_decision`); None
+    for a result stored before they held it."""
+    basis = details.get("transient_basis")
+    if basis is None:
+        return None
+    n, lvl = details.get("power_on_records"), details.get("transient_test_level")
+    p = details.get("transient_test_p")
+    pt = "—" if p is None else f"{p:.2g}"
+    en = {"one_record": "one record: its own transient fitted",
+          "timing_differs": f"the {n} records differ in length or timing: one transient "
+                            "fitted to each power-on",
+          "not_refuted": f"one transient fitted to all {n} records: the likelihood-ratio "
+                         f"test of one transient against one per record does not refute it "
+                         f"(p = {pt} ≥ {lvl:g})",
+          "refuted": f"one transient fitted to each of the {n} power-ons: the likelihood-"
+                     f"ratio test refutes one transient for all records (p = {pt} < {lvl:g})"}
+    zh = {"one_record": "仅一次记录：按其自身瞬态拟合",
+          "timing_differs": f"{n} 次记录的长度或时间不同：每次上电各拟合一个瞬态",
+          "not_refuted": f"{n} 次记录共同拟合一个瞬态：单一瞬态对各记录单独瞬态的似然比检验"
+                         f"未予否定（p = {pt} ≥ {lvl:g}）",
+          "refuted": f"{n} 次上电各拟合一个瞬态：似然比检验否定了所有记录共用一个瞬态"
+                     f"（p = {pt} < {lvl:g}）"}
+    if lang == "zh":
+        return f"上电后零偏漂移（5.3.3.5）的选择超出量与区间：{zh[basis]}。"
+    return (f"Bias drift after power on (5.3.3.5), its selection excess and interval: "
+            f"{en[basis]}.")
+
+
+#: What decided how an item was evaluated, stated under the results table, in summary.txt
+#: and as the item's dcc:description (:func:`gonio.report.rate_content.item_conditions`).
+ITEM_CONDITIONS = {"bias_drift_after_power_on": _power_on_fit}
+
 HEADING = ("MEMS gyroscope calibration results (IEC 62047-20 test methods)",
            "MEMS陀螺仪校准结果（按 IEC 62047-20 试验方法）")
 

@@ -1350,12 +1350,12 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
         return m
     recs = [(tt, ys, y) for _, tt, ys, y in _power_on_records(ctx)]
     coef, coef_dof = drift_coef_power_on_dps(ctx)
-    val, vals, u, m_sel = power_on_drift_budget(recs, ctx.protocol["power_on"]["reference_samples"],
-                                                lambda sep: drift_u_dps(ctx, sep), coef,
-                                                coef_dof)
+    val, vals, u, m_sel, fit = power_on_drift_budget(
+        recs, ctx.protocol["power_on"]["reference_samples"], lambda sep: drift_u_dps(ctx, sep),
+        coef, coef_dof)
     return Item("bias_drift_after_power_on", t, cl, un, val, uncertainty=u,
                 details={"per_record_dps": vals, "reading_dps": max(vals),
-                         "contending_values": m_sel})
+                         "contending_values": m_sel, **fit})
 
 
 def _one_blas_thread(fn):
@@ -1582,7 +1582,8 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     are the smoothed values within 2√2·σ of the largest (σ of one smoothed value less the
     reference)."""
     rep = _power_on_replicates(recs, nr, drift_u, drift_coef, test=True)
-    if rep["pooled"] and not power_on_one_transient(rep["lr"], rep["lr_star"])[0]:
+    fit = power_on_fit_decision(recs, rep)
+    if rep["pooled"] and not fit["transient_one"]:
         rep = _power_on_replicates(recs, nr, drift_u, drift_coef, pooled=False)
     vals, r_hat, r_star, r_fit = rep["vals"], rep["r_hat"], rep["r_star"], rep["r_fit"]
     excess = float(r_star.mean() - r_hat)
@@ -1617,7 +1618,32 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
                 k_source=K_SOURCE_POWER_ON, interval=(lo, hi))
-    return value, vals, u, m_sel
+    return value, vals, u, m_sel, fit
+
+
+#: why the power-on records were fitted as they were (:func:`power_on_fit_decision`)
+POWER_ON_FIT_BASES = ("one_record", "timing_differs", "not_refuted", "refuted")
+
+
+def power_on_fit_decision(recs, rep: dict) -> dict:
+    """IEC 62047-20 5.3.3.5, reading taken: the pooling decision of
+    :func:`power_on_drift_budget` as the item's details record it and the certificate,
+    summary.txt and the DCC state it (``transient_one``: one transient fitted to all
+    records, else one per power-on; ``transient_basis``, one of
+    :data:`POWER_ON_FIT_BASES`: one record only, records of different length or timing
+    (:func:`power_on_records_pooled` false), or the likelihood-ratio test of one transient
+    not refuted / refuted at :data:`POWER_ON_POOL_LEVEL` (:func:`power_on_one_transient`);
+    ``transient_test_p`` its p, None where no test was possible; ``transient_test_level``;
+    ``power_on_records`` the number of records). ``rep``: the first replicates
+    (:func:`_power_on_replicates` with ``test=True``)."""
+    out = {"power_on_records": len(recs), "transient_test_level": POWER_ON_POOL_LEVEL,
+           "transient_test_p": None}
+    if not rep["pooled"]:
+        return {**out, "transient_one": False,
+                "transient_basis": "one_record" if len(recs) < 2 else "timing_differs"}
+    one, p = power_on_one_transient(rep["lr"], rep["lr_star"])
+    return {**out, "transient_one": bool(one), "transient_test_p": float(p),
+            "transient_basis": "not_refuted" if one else "refuted"}
 
 
 #: Relative step of the noise variances for the shares of u_c² (:func:`_power_on_shares`).
