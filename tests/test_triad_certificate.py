@@ -462,8 +462,9 @@ def test_one_statement_per_item_everywhere(run):
         block = dcc[dcc.index(f'id="result-{key}"'):]
         block = block[:block.index("</dcc:result>")]
         assert "expandedMU" not in block and "coverageFactor" not in block, key
-        d_lo = re.search(r"<si:intervalMin>([^<]+)<", block)[1]
-        d_hi = re.search(r"<si:intervalMax>([^<]+)<", block)[1]
+        ends = re.search(r"<si:labelXMLList>intervalMin intervalMax</si:labelXMLList>\s*"
+                         r"<si:valueXMLList>([^<]+)<", block)[1].split()
+        d_lo, d_hi = ends
         assert (float(s_lo.replace("−", "-")), float(s_hi.replace("−", "-"))) == (
             float(d_lo), float(d_hi)), key
         step = 10.0 ** math.floor(math.log10(abs(hi - lo)) - 2)
@@ -474,3 +475,31 @@ def test_one_statement_per_item_everywhere(run):
     for key in ("b_x", "b_z_t1_v1", "ARW_z_t1"):
         u = res["items"][key]["uncertainty"]
         assert u["k"] is not None and u.get("interval") is None, key
+
+
+def test_dcc_states_no_uncertainty_the_certificate_does_not(run, dcc_schema):
+    """The DCC states an item's standard uncertainty (si:valueStandardMU) only where the
+    certificate states that item's u_c: the bound-condition items (M, S, L, K(ϑ, U)) are
+    certified by value ± (a + k·u), their row states a, u of the other lines, ν and k, and
+    their JCGM 100 u_c is kept in results.json "not certified" — the DCC writes their
+    interval's ends (p = 95.45 %) without a standard uncertainty. The DCC is valid against
+    the carried DCC 3.3.0 schema."""
+    res, page = run["res"], run["html"]
+    dcc_path = run["dir"] / "cal" / "certificate.dcc.xml"
+    dcc = dcc_path.read_text(encoding="utf-8")
+    dcc_schema.validate(str(dcc_path))
+    on_cert = {src.split(".")[1] for src, _, _ in SPANS.findall(page)
+               if src.startswith("items.") and src.endswith(".uncertainty.u_c")}
+    blocks = {m[1]: m[2] for m in re.finditer(
+        r'<dcc:result id="result-([^"]+)">(.*?)</dcc:result>', dcc, flags=re.S)}
+    stated_u = {k for k, b in blocks.items() if "valueStandardMU" in b}
+    assert stated_u <= on_cert, sorted(stated_u - on_cert)[:5]
+    assert "valueStandardMUXMLList" not in dcc or all(
+        k in on_cert for k in res["items"] if k.startswith("M_"))
+    bound = [k for k, it in res["items"].items()
+             if (it.get("details") or {}).get("bound_condition")]
+    assert bound
+    for key in bound:
+        b = blocks[key]
+        assert "valueStandardMU" not in b and "intervalMin intervalMax" in b, key
+        assert "p = 95.45 %" in b, key

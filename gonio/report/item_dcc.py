@@ -16,7 +16,9 @@ uncertainty (U, k, p) as the certificate states them (:func:`gonio.report.stated
 the one statement rule), or a dcc:noQuantity with the reason; then one dcc:result per matrix
 the specification lists (``MATRICES`` of its certificate data: name, item keys row by row)
 as an si:realListXMLList with its si:expandedMUXMLList. Conformity statements
-(``items.<key>.conformity``) go into the statements as in the other DCCs.
+(``items.<key>.conformity``) go into the statements as in the other DCCs. An item stated by
+a bound-condition interval, whose u_c the certificate does not state (:func:`u_c_certified`),
+has its interval's ends written without a standard uncertainty (:func:`_interval_quantity`).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from gonio.report.dcc import (administrative_data, stated_p, conformity_statemen
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
 from gonio.report.stated import item_nums
-from gonio.result.statement import dsi_unit
+from gonio.result.statement import dsi_unit, p_text
 
 #: Output units of a sensor (counts of its digital output) → D-SI.
 _HEADS = ((r"lsb/(°/s)", r"\one\degree\tothe{-1}\second"), (r"counts/(°/s)",
@@ -66,6 +68,42 @@ def compose_dsi(unit: str, extra=None) -> str:
                 if re.fullmatch(r"(?:/[^/^]+(?:\^\d+)?)*", rest):
                     return out
     raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", key="unit")
+
+
+def u_c_certified(it: dict) -> bool:
+    """Whether the certificate states item ``it``'s u_c, so that the DCC may state it as
+    the coverage interval's si:valueStandardMU: not for an item stated by a bound-condition
+    interval (``details.bound_condition``: value ± (a + k·u), the table's errors at their
+    bounds plus k·u of the other lines), whose certificate row states a, u of the other
+    lines, their ν and k — its u_c (the JCGM 100 budget) is kept in results.json, not
+    certified. The DCC writes such an item's interval ends without a standard uncertainty
+    (:func:`_interval_quantity`).
+
+    >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
+    (False, True)
+    """
+    return not (it.get("details") or {}).get("bound_condition")
+
+
+def _interval_quantity(d, name: str, ends, dsi: str, p: float, what: str) -> None:
+    """An interval stated without a standard uncertainty (:func:`u_c_certified` false):
+    a dcc:quantity holding its two ends as an si:realListXMLList labelled intervalMin,
+    intervalMax, its p and what it is in the name (si:coverageIntervalMU requires an
+    si:valueStandardMU, which the certificate does not state)."""
+    from gonio.report.dcc import dsi_decimal
+
+    q = element(d, "dcc:quantity", refType="basic_measurementUncertainty")
+    text_element(q, "dcc:name", f"{name}: {what}; p = {p_text(p)} %")
+    rl = element(q, "si:realListXMLList")
+    element(rl, "si:labelXMLList", "intervalMin intervalMax")
+    element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(e)) for e in ends))
+    element(rl, "si:unitXMLList", f"{dsi} {dsi}")
+
+
+#: what a bound-condition interval is, in the DCC's words
+BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the table's errors at their "
+                  "bounds in their worst combination, a, plus k·u of the other lines; no "
+                  "standard uncertainty of the item is certified")
 
 
 def _p(it: dict) -> float | None:
@@ -114,16 +152,21 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             continue
         n = item_nums(it, f"items.{key}")
         p = _p(it) if _p(it) is not None else coverage_probability
-        kw = {}
+        kw, bound = {}, None
         if n["U"] is not None and n["k"] is not None and p is not None:
             kw = {"U": n["U"], "k": n["k"], "p": float(p)}
+        elif n["interval"] is not None and not u_c_certified(it) and p is not None:
+            bound = n["interval"]["ends"]               # its ends, no valueStandardMU
         elif n["interval"] is not None and n["interval"]["u"] and p is not None:
             kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                   "p": float(p)}                       # stated by its coverage interval
         st = n.get("statement")
-        quantity(d, name, n["stated_value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
+        dsi = compose_dsi(it["unit"], spec.dcc_units)
+        quantity(d, name, n["stated_value"], "", dsi=dsi,
                  ref_type="basic_measuredValue",
                  description=st.text() if st is not None and st.below_zero else None, **kw)
+        if bound is not None:
+            _interval_quantity(d, name, bound, dsi, float(p), BOUND_INTERVAL)
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):
@@ -163,6 +206,23 @@ def matrix_result(results, name: str, keys: list[str], items: dict,
             element(mu, "si:coverageFactorXMLList", " ".join(dsi_decimal(str(n["k"]))
                                                              for n in ns))
             element(mu, "si:coverageProbabilityXMLList", " ".join(stated_p(p) for p in ps))
+    elif all(n["interval"] is not None for n in ns) and not all(
+            u_c_certified(items[k]) for k in keys):
+        # bound-condition intervals: their ends as two lists, no standard uncertainty
+        ps = [(_p(items[k]) if _p(items[k]) is not None else p_default) for k in keys]
+        if all(p is not None for p in ps):
+            d = q.getparent()
+            for end, label in ((0, "intervalMin"), (1, "intervalMax")):
+                qe = element(d, "dcc:quantity", refType="basic_measurementUncertainty")
+                text_element(qe, "dcc:name", f"{name}: {label} of each element's "
+                             f"{BOUND_INTERVAL}; p = "
+                             f"{', '.join(dict.fromkeys(p_text(p) for p in ps))} %")
+                el = element(qe, "si:realListXMLList")
+                element(el, "si:labelXMLList", " ".join(keys))
+                element(el, "si:valueXMLList", " ".join(
+                    dsi_decimal(str(n["interval"]["ends"][end])) for n in ns))
+                element(el, "si:unitXMLList", " ".join(compose_dsi(items[k]["unit"])
+                                                       for k in keys))
     elif all(n["interval"] is not None and n["interval"]["u"] for n in ns):
         # every element stated by its coverage interval alone: the list's coverage
         # intervals, as each item's own result states it
