@@ -47,15 +47,15 @@ def _power_on_fit(details: dict, lang: str) -> str | None:
                             "fitted to each power-on",
           "not_refuted": f"one transient fitted to all {n} records: the likelihood-ratio "
                          f"test of one transient against one per record does not refute it "
-                         f"(p = {pt} ≥ {lvl:g})",
+                         f"(p-value {pt} ≥ {lvl:g})",
           "refuted": f"one transient fitted to each of the {n} power-ons: the likelihood-"
-                     f"ratio test refutes one transient for all records (p = {pt} < {lvl:g})"}
+                     f"ratio test refutes one transient for all records (p-value {pt} < {lvl:g})"}
     zh = {"one_record": "仅一次记录：按其自身瞬态拟合",
           "timing_differs": f"{n} 次记录的长度或时间不同：每次上电各拟合一个瞬态",
           "not_refuted": f"{n} 次记录共同拟合一个瞬态：单一瞬态对各记录单独瞬态的似然比检验"
-                         f"未予否定（p = {pt} ≥ {lvl:g}）",
+                         f"未予否定（p 值 {pt} ≥ {lvl:g}）",
           "refuted": f"{n} 次上电各拟合一个瞬态：似然比检验否定了所有记录共用一个瞬态"
-                     f"（p = {pt} < {lvl:g}）"}
+                     f"（p 值 {pt} < {lvl:g}）"}
     if lang == "zh":
         return f"上电后零偏漂移（5.3.3.5）的选择超出量与区间：{zh[basis]}。"
     return (f"Bias drift after power on (5.3.3.5), its selection excess and interval: "
