@@ -699,6 +699,22 @@ DCC_ZH: dict[str, str] = {
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
 DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
+    # a bound-condition interval's ends (gonio.report.item_dcc.BOUND_INTERVAL)
+    (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the table's errors at their "
+     r"bounds in their worst combination, a, plus k·u of the other lines; no standard "
+     r"uncertainty of the item is certified; p = (\S+) %",
+     "{1}：界限条件区间，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他分量的 k·u；"
+     "不给出该项的标准不确定度；p = {2} %"),
+    (r"(.+): intervalMin of each element's bound-condition interval, value ± \(a \+ k·u\): "
+     r"the table's errors at their bounds in their worst combination, a, plus k·u of the "
+     r"other lines; no standard uncertainty of the item is certified; p = (\S+) %",
+     "{1}：各元素界限条件区间的下限，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他"
+     "分量的 k·u；不给出该项的标准不确定度；p = {2} %"),
+    (r"(.+): intervalMax of each element's bound-condition interval, value ± \(a \+ k·u\): "
+     r"the table's errors at their bounds in their worst combination, a, plus k·u of the "
+     r"other lines; no standard uncertainty of the item is certified; p = (\S+) %",
+     "{1}：各元素界限条件区间的上限，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他"
+     "分量的 k·u；不给出该项的标准不确定度；p = {2} %"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     (r"Statement of conformity: (.+)", "符合性声明：{1}"),
     (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance "
