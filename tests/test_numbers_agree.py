@@ -242,6 +242,13 @@ def dcc_fields(doc: bytes, res: dict) -> dict:
             f |= {"U": get(".//si:valueExpandedMU"), "k": get(".//si:coverageFactor"),
                   "p": get(".//si:coverageProbability")}
         iv = real.find(".//si:coverageIntervalMU", NS)
+        nxt = q.getnext()
+        if iv is None and nxt is not None and nxt.findtext(
+                "si:realListXMLList/si:labelXMLList", None, NS) == "intervalMin intervalMax":
+            # a bound-condition interval: its ends, its p in the name, no standard uncertainty
+            lo, hi = nxt.findtext("si:realListXMLList/si:valueXMLList", None, NS).split()
+            p = re.search(r"p = (\S+) %", "".join(nxt.find("dcc:name", NS).itertext()))[1]
+            f |= {"interval": (lo, hi), "p": str(Decimal(p).scaleb(-2))}
         if iv is not None:
             f |= {"interval": (get(".//si:intervalMin"), get(".//si:intervalMax")),
                   "p": get(".//si:coverageIntervalMU/si:coverageProbability"),

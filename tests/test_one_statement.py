@@ -149,6 +149,19 @@ def test_dcc_states_each_item_once(demo):
             if field != value_field(it):     # E's signed extreme beside its statement
                 assert kinds == [], (key, field, kinds)
                 continue
+            if by_interval(it) and (it.get("details") or {}).get("bound_condition"):
+                # certified by value ± (a + k·u), no u_c on the certificate: the interval's
+                # ends in the next quantity, no standard uncertainty (item_dcc.u_c_certified)
+                assert kinds == [], (key, kinds)
+                nxt = real.getparent().getnext()
+                assert nxt.find("si:realListXMLList/si:labelXMLList", NS).text == \
+                    "intervalMin intervalMax", key
+                lo_text, hi_text = nxt.find("si:realListXMLList/si:valueXMLList", NS).text.split()
+                ulp = 10.0 ** -len(hi_text.partition(".")[2]) if "." in hi_text else 1.0
+                want = stated_value(it) + it["uncertainty"]["U"]
+                assert want * (1 - 1e-12) <= float(hi_text) < want + ulp * (1 + 1e-9), key
+                assert float(lo_text) <= stated_value(it), key
+                continue
             if by_interval(it):
                 assert kinds == ["coverageIntervalMU"], (key, kinds)
                 if it["unit"].endswith("/g"):     # written per m s⁻² (tests/test_rate_dcc.py)
@@ -220,6 +233,12 @@ def test_numbers_agree_across_outputs(demo):
             # alone (its bias-corrected estimate fell below zero): never a 0 in its place
             assert real.find("si:value", NS).text == dsi_decimal(st.value_text), key
             mu = real.find("si:measurementUncertaintyUnivariate/*", NS)
+            if mu is None and (it.get("details") or {}).get("bound_condition"):
+                nxt = real.getparent().getnext()        # its interval's ends, no u
+                assert tuple(nxt.find("si:realListXMLList/si:valueXMLList", NS).text.split()) \
+                    == tuple(dsi_decimal(x) for x in st.interval_ends), key
+                assert f"p = {st.p} %" in "".join(nxt.find("dcc:name", NS).itertext()), key
+                continue
             if mu is None:
                 continue
             # the p the certificate states ("p ≈ 98 %" is 0.98), never more digits than it

@@ -8,6 +8,8 @@ conformity reaches the certificate and the DCC."""
 
 from __future__ import annotations
 
+from decimal import Decimal
+
 import json
 import re
 
@@ -64,12 +66,19 @@ def _dcc_values(doc: bytes) -> dict:
             mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU/"
                            "si:valueExpandedMU", NS)
             ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+            ends = None if ci is None else (ci.find("si:intervalMin", NS).text,
+                                            ci.find("si:intervalMax", NS).text,
+                                            ci.find("si:coverageProbability", NS).text)
+            nxt = real.getparent().getnext()
+            if ci is None and nxt is not None and nxt.findtext(
+                    "si:realListXMLList/si:labelXMLList", None, NS) == "intervalMin intervalMax":
+                # a bound-condition interval: its ends without a standard uncertainty, p in
+                # its name (gonio.report.item_dcc.u_c_certified)
+                lo, hi = nxt.findtext("si:realListXMLList/si:valueXMLList", None, NS).split()
+                p = re.search(r"p = (\S+) %", "".join(nxt.find("dcc:name", NS).itertext()))[1]
+                ends = (lo, hi, str(Decimal(p).scaleb(-2)))
             out[rid[len("result-"):]] = (real.find("si:value", NS).text,
-                                         None if mu is None else mu.text,
-                                         None if ci is None else
-                                         (ci.find("si:intervalMin", NS).text,
-                                          ci.find("si:intervalMax", NS).text,
-                                          ci.find("si:coverageProbability", NS).text))
+                                         None if mu is None else mu.text, ends)
     return out
 
 
@@ -135,16 +144,23 @@ def test_triad_matrices_as_lists_with_uncertainty(run):
     assert values == [dsi_decimal(item_statement(res[k]).value_text) for k in keys]
     # M is stated by its bound-condition interval (one statement): the list carries the
     # intervals each item's result states, no expanded U or k
-    mu = rl.find("si:measurementUncertaintyUnivariateXMLList", NS)
-    assert mu.find("si:expandedMUXMLList", NS) is None
-    iv = mu.find("si:coverageIntervalMUXMLList", NS)
-    for tag, end in (("si:intervalMinXMLList", 0), ("si:intervalMaxXMLList", 1)):
-        assert iv.find(tag, NS).text.split() == [
-            dsi_decimal(item_statement(res[k]).interval_ends[end]) for k in keys], tag
+    # intervals each item's result states, no expanded U or k, and no standard uncertainty
+    # (the certificate certifies none for them: gonio.report.item_dcc.u_c_certified)
+    assert rl.find("si:measurementUncertaintyUnivariateXMLList", NS) is None
+    data = root.find(".//dcc:result[@id='matrix-system-matrix-M']/dcc:data", NS)
+    ends = [q for q in data.iterfind("dcc:quantity", NS)
+            if "of each element's bound-condition interval" in "".join(
+                q.find("dcc:name", NS).itertext())]
+    assert len(ends) == 2
+    for q, end in zip(ends, (0, 1)):
+        assert q.findtext("si:realListXMLList/si:valueXMLList", None, NS).split() == [
+            dsi_decimal(item_statement(res[k]).interval_ends[end]) for k in keys], end
     for k in keys:                     # the same ends as the item's own result
-        one = root.find(f".//dcc:result[@id='result-{k}']//si:coverageIntervalMU", NS)
-        assert one.find("si:intervalMin", NS).text == dsi_decimal(
-            item_statement(res[k]).interval_ends[0]), k
+        r = root.find(f".//dcc:result[@id='result-{k}']", NS)
+        assert "valueStandardMU" not in etree.tostring(r).decode(), k
+        q = r.findall("dcc:data/dcc:quantity", NS)[1]
+        assert q.findtext("si:realListXMLList/si:valueXMLList", None, NS).split()[0] == \
+            dsi_decimal(item_statement(res[k]).interval_ends[0]), k
 
 
 def test_a_decided_conformity_reaches_certificate_and_dcc(run, tmp_path):
