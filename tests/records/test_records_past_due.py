@@ -26,6 +26,14 @@ from .conftest import PASSWORD, make_people
 TODAY = dt.datetime.now(dt.timezone.utc).date()     # the service's today (UTC)
 
 
+@pytest.fixture(autouse=True)
+def _today_at_each_test():
+    """TODAY read again as each test starts: a suite started before midnight UTC runs these
+    after it (a module constant was the day before's)."""
+    global TODAY
+    TODAY = dt.datetime.now(dt.timezone.utc).date()
+
+
 def gonio(*args, data, rc=0):
     env = dict(os.environ, GONIO_PASSWORD=PASSWORD)
     r = subprocess.run([sys.executable, "-m", "gonio", *map(str, args), "--data", str(data)],

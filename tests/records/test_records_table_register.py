@@ -24,7 +24,7 @@ from sqlalchemy import select, text, update
 from sqlalchemy.exc import DBAPIError, IntegrityError
 
 from gonio.errors import GonioError
-from gonio.records import services
+from gonio.records import models, services
 from gonio.records.models import AuditEvent, Calibration, CalibrationFile, TableCalibration
 
 from .conftest import PASSWORD, make_people
@@ -610,6 +610,7 @@ def test_register_today_is_the_utc_date(store, monkeypatch):
     for at, want in ((dt.datetime(2026, 1, 1, 23, 30), ""),
                      (dt.datetime(2026, 1, 2, 0, 30), "expired: it was due on 2026-01-01")):
         monkeypatch.setattr(services, "utcnow", lambda at=at: at)
+        monkeypatch.setattr(models, "utcnow", lambda at=at: at)    # models.records_today
         assert [r["state"] for r in services.table_calibrations(store)] == [want], at
 
 
