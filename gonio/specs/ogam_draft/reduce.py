@@ -85,6 +85,13 @@ class Reduction:
                 "compensation_counts_per_s": [float(c) for c in self.compensation_counts_per_s]}
 
 
+#: Times within this fraction of the sample interval are the same sample's: the stream's
+#: samples lie on a grid of dt, and the virtual bench's mark moves a time by 1 ns
+#: (gonio.formats.watermark), so a rest 1 ns short of its dwell, or a zeroing time 1 ns past
+#: its sample, must still take that sample (at 1 kHz: 10 µs).
+TIME_TOLERANCE_OF_DT = 0.01
+
+
 @dataclass
 class _Ctx:
     st: object               # the sample source (MemorySamples or StreamFile)
@@ -92,7 +99,7 @@ class _Ctx:
     rests: list[Rest]
     pos_tol: float
     quantised: bool
-    eps: float
+    eps: float               # one sample's time tolerance (TIME_TOLERANCE_OF_DT of dt)
     used: set = field(default_factory=set)
     rows: list = field(default_factory=list)
     unmatched: list = field(default_factory=list)
@@ -156,7 +163,7 @@ def _find_pair(ctx: _Ctx, start: int, zero_level: float | None, delta: float,
     R = ctx.rests
     tol = ctx.pos_tol
     for r in range(start + 1 if zero_fixed is None else max(start, zero_fixed) + 1, len(R)):
-        if R[r].t_end_s + 1e-9 < R[r].t_arrive_s + read_need_s:
+        if R[r].t_end_s + ctx.eps < R[r].t_arrive_s + read_need_s:
             continue
         if zero_fixed is not None:
             if abs(R[r].level_deg - R[zero_fixed].level_deg - delta) < tol:
@@ -190,7 +197,7 @@ def _zero_stability(ctx: _Ctx) -> None:
     need = static + (z.readings - 1) * z.interval_s
     for q in range(ctx.cursor, len(ctx.rests)):
         r = ctx.rests[q]
-        if r.t_end_s + 1e-9 >= r.t_arrive_s + need:
+        if r.t_end_s + ctx.eps >= r.t_arrive_s + need:
             break
     else:
         ctx.unmatched.append({"kind": "round", "test": "zero_stability", "series": 1,
@@ -239,7 +246,7 @@ def _tilt_estimate(ctx: _Ctx) -> None:
         x = 360.0 * i / plan.positions
         while q < len(ctx.rests):
             r = ctx.rests[q]
-            long_enough = r.t_end_s + 1e-9 >= r.t_arrive_s + need
+            long_enough = r.t_end_s + ctx.eps >= r.t_arrive_s + need
             if long_enough and (ref is None or
                                 abs(_wrap_deg(r.level_deg - ref - x)) < ctx.pos_tol):
                 break
@@ -490,7 +497,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
         raise GonioError("the stream has fewer than 3 samples", file=st.path)
     quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and int_counts
     tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if has_table else 1.0)
-    ctx = _Ctx(st, protocol, rests, tol, quantised, eps=1e-6 * dt)
+    ctx = _Ctx(st, protocol, rests, tol, quantised, eps=TIME_TOLERANCE_OF_DT * dt)
     ctx.log.append(f"{n} samples, {len(rests)} rests "
                    f"({'table encoder' if has_table else 'gyro rate'})")
     if protocol.zero_stability is not None:
