@@ -235,7 +235,7 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
 
     - the rate table's relative rate error: normal, σ = ``rate_table_u_rel``; where none
       is stated (None), uniform within JJF 1535 Table 2's ±0.05 % (the bound the budget
-      then carries, :func:`gonio.specs._rate_family.rate_records.rate_table_line`);
+      then carries: the rate specifications' table line, docs/formats.md);
     - the voltmeter's relative gain error: normal, σ = ``acquisition_u_rel``;
     - the chamber's deviation, at each set point its own: uniform in
       ±``chamber_deviation_bound_c`` (Chamber.point_deviation_c, seeded per trial);
