@@ -92,7 +92,8 @@ def test_every_number_in_html_equals_results_json(run):
     srcs = {s for s, _, _ in nums}
     for item in ITEMS:      # a range whose corrected estimate fell below zero: its bound
         assert f"items.{item}.value" in srcs or f"items.{item}.upper_bound" in srcs, item
-    assert "extra.uncertainty.U_arcsec" in srcs
+    # the per-point U printed is k·u + b, the table's bound at the point included
+    assert "extra.uncertainty.U_bound_arcsec" in srcs
     for src, rule, text in nums:     # the certificate's minus sign (U+2212), else the same
         assert text == minus_sign(display(rule, lookup(run["results"], src), U)), (src, rule, text)
     # The stated U obeys GUM 7.2.6: two significant digits.
@@ -132,8 +133,8 @@ def test_html_in_chromium_items_u_and_figures_visible(run, tmp_path):
     text = re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]+>", " ", dom)))
     for item in ITEMS:
         assert L[item] in text, item
-    U = display("U", run["results"]["extra"]["uncertainty"]["U_arcsec"])
-    k = display("k", run["results"]["extra"]["uncertainty"]["k"])
+    U = display("U", run["results"]["extra"]["uncertainty"]["U_bound_arcsec"])
+    k = display("k", run["results"]["extra"]["uncertainty"]["k_bound"])
     assert re.search(rf"U = {re.escape(U)} ?″, k = {re.escape(k)}", text), "U with its k is not shown"
     assert L["virtual"] in text
     shot = tmp_path / "certificate.png"
