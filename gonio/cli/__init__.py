@@ -69,8 +69,20 @@ class Terminated(BaseException):
     """Raised by the SIGTERM handler so that every ``finally`` (staging clean-up) runs."""
 
 
+#: The stop signals received by this process (:func:`_on_sigterm`, :func:`_on_sigint`): a
+#: signal that lands inside an extension module's import surfaces as that import's error
+#: ("ImportError: initialization failed"), which is then the stop, not a bug.
+_RECEIVED: list[int] = []
+
+
 def _on_sigterm(signum, frame):
+    _RECEIVED.append(signal.SIGTERM)
     raise Terminated()
+
+
+def _on_sigint(signum, frame):
+    _RECEIVED.append(signal.SIGINT)
+    raise KeyboardInterrupt
 
 
 #: The commands (by their words) whose stop is SIGINT or SIGTERM: an acquisition stopped by
@@ -91,8 +103,9 @@ def _install_stop_handlers(argv: list[str], own_process: bool) -> None:
     try:
         if stopped or signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
             signal.signal(signal.SIGTERM, _on_sigterm)
-        if stopped and signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
+        if stopped or (own_process
+                       and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+            signal.signal(signal.SIGINT, _on_sigint)
     except ValueError:        # not the main thread (called from a test runner's thread)
         pass
 
@@ -241,6 +254,11 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:      # argparse: --help, --version, a usage error
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     except Exception as exc:  # a bug: still one line unless asked for the traceback
+        if _RECEIVED:          # the stop landed inside an import: it is the stop
+            _quiet_shutdown()
+            stop = _RECEIVED[-1] == signal.SIGTERM
+            sys.stderr.write("gonio: terminated\n" if stop else "gonio: interrupted\n")
+            return 143 if stop else 130
         if os.environ.get("GONIO_DEBUG"):
             raise
         sys.stderr.write(f"gonio: internal error: {type(exc).__name__}: {_short(exc, 300)} "
