@@ -65,3 +65,23 @@ def small_ogam_bench():
                             quantisation=True)
     return Bench("small", inst, TableConfig(positioning_random_arcsec=0.05), latitude_deg=40.0,
                  sample_rate_hz=10.0)
+
+
+def plant_71_counts(readings, out, counts: int, stop_deg: float = 60.0, series: int = 1,
+                    rate: str = "60.0", orientation: str = "up"):
+    """A copy of the optical readings file ``readings`` at ``out`` (folders made) with
+    ``counts`` added to ``gyro_counts`` of the 7.1 (``scale_factor``) reading of ``series``
+    at ``rate`` and ``orientation`` whose ``table_deg`` is ``stop_deg``: a typo of
+    3600 · ``counts`` / K ″ in one reading. Returns (the reading's 1-based line number, out)."""
+    readings, out = Path(readings), Path(out)
+    lines = readings.read_text().splitlines(keepends=True)
+    i = next(n for n, ln in enumerate(lines)
+             if (p := ln.split(","))[0] == "scale_factor" and len(p) > 7
+             and p[1] == str(series) and p[3] == rate and p[4] == orientation
+             and float(p[6]) == float(stop_deg))
+    p = lines[i].rstrip("\n").split(",")
+    p[7] = str(int(p[7]) + int(counts))
+    lines[i] = ",".join(p) + "\n"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("".join(lines))
+    return i + 1, out

@@ -32,6 +32,8 @@ from gonio.specs.ogam_draft.study import study_bench
 from gonio.specs.ogam_draft.truth import truth_from_session
 from gonio.units import ARCSEC_PER_DEG
 
+from tests._helpers import plant_71_counts
+
 
 def _set_aside(df, md, protocol):
     return [f for f in screen(Readings(df, md, None), protocol) if f.action != "flagged"]
@@ -51,20 +53,12 @@ def reviewer(tmp_path_factory):
     out = tmp_path_factory.mktemp("rev71")
     assert main(["simulate", "--seed", "45", "--out", str(out / "sim")]) == 0
     clean = out / "sim" / "readings.csv"
-    lines = clean.read_text().splitlines(keepends=True)
-    i = next(n for n, ln in enumerate(lines) if ln.split(",")[:5] == [
-        "scale_factor", "1", "1", "60.0", "up"])
-    p = lines[i].rstrip("\n").split(",")
-    p[7] = str(int(p[7]) + 16)
-    lines[i] = ",".join(p) + "\n"
-    typo = out / "typo" / "readings.csv"
-    typo.parent.mkdir()
-    typo.write_text("".join(lines))
+    line, typo = plant_71_counts(clean, out / "typo" / "readings.csv", 16)
     res = {}
     for name, f in (("clean", clean), ("typo", typo)):
         assert main(["calibrate", str(f), "--out", str(out / f"o_{name}")]) == 0
         res[name] = json.loads((out / f"o_{name}" / "results.json").read_text())
-    return i + 1, res, out
+    return line, res, out
 
 
 def test_the_reviewers_three_quarter_arcsec_typo_is_set_aside_and_E_comes_back(reviewer):

@@ -23,6 +23,8 @@ import pytest
 
 from gonio.cli import main
 
+from tests._helpers import plant_71_counts
+
 STOPS = (60.0, 120.0, 180.0, 240.0, 300.0)       # 360° is the zero itself
 
 
@@ -31,20 +33,13 @@ def typo(tmp_path_factory):
     out = tmp_path_factory.mktemp("aside")
     assert main(["simulate", "--seed", "3", "--out", str(out / "sim")]) == 0
     clean = out / "sim" / "readings.csv"
-    lines = clean.read_text().splitlines(keepends=True)
-    i = next(n for n, ln in enumerate(lines) if ln.split(",")[:5] == [
-        "scale_factor", "1", "1", "60.0", "up"])
-    p = lines[i].rstrip("\n").split(",")
-    p[7] = str(int(p[7]) + 43)                    # 43 counts of 0.047″: 2.0″
-    lines[i] = ",".join(p) + "\n"
-    f = out / "typo" / "readings.csv"
-    f.parent.mkdir()
-    f.write_text("".join(lines))
+    # 43 counts of 0.047″ (2.0″) on 7.1's 60° reading
+    line, f = plant_71_counts(clean, out / "typo" / "readings.csv", 43)
     res = {}
     for name, src in (("clean", clean), ("typo", f)):
         assert main(["calibrate", str(src), "--out", str(out / name), "--dcc"]) == 0
         res[name] = json.loads((out / name / "results.json").read_text())
-    return i + 1, res, out
+    return line, res, out
 
 
 def _k_table_line(res):
