@@ -216,12 +216,15 @@ LABELS: dict[str, dict[str, str]] = {
                            "自身 χ² 检验所得最大真标准偏差的 95 % 区间给出：上端为各记录自身 χ² 上限中的"
                            "最大者，下端为各记录按多重比较（西达克）校正水平的下限中的最大者，对任何真标准偏差与记录长度"
                            "均成立"},
-    "k_iv_bound": {"en": "a quantity the rate table's errors enter by its bound-condition interval "
-                         "value ± (a + k·u): the table's errors at their bounds in their worst "
-                         "combination, a, plus k·u of the other lines, which holds at every "
-                         "table error within the bounds",
-                   "zh": "受转台误差影响的量给出其界限条件区间 值 ± (a + k·u)：转台误差取其界限按最不利"
-                         "组合为 a，加上其他分量的 k·u，在界限内任一转台误差下成立"},
+    "k_iv_bound": {"en": "a quantity bounded errors enter (the rate table's; for a rate gyro "
+                         "without a certificate u for its table, the table's bound and the "
+                         "chamber's temperature error) by its bound-condition interval "
+                         "value ± (a + k·u): those errors at their bounds in their worst "
+                         "combination, added linearly, a, plus k·u of the other lines (ν "
+                         "stated is theirs), which holds at every error within the bounds",
+                   "zh": "受有界误差影响的量（转台误差；速率陀螺转台未给出校准证书不确定度时，为转台的"
+                         "界限与温箱温度误差）给出其界限条件区间 值 ± (a + k·u)：这些误差取其界限按最不利"
+                         "组合线性相加为 a，加上其他分量的 k·u（所给 ν 为其他分量的），在界限内任一误差下成立"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},

@@ -125,7 +125,26 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
                       _num(unc["u_c"], f"items.{key}.uncertainty.u_c", "sig3")])
         if n["U"] is not None:
             brows.append([it["clause"], "U", factors_cell(n, L), "", n["U"]])
+        elif isinstance((it.get("details") or {}).get("bound_condition"), dict):
+            brows.append(bound_condition_row(it, f"items.{key}", n))
     return brows
+
+
+def bound_condition_row(it: dict, src: str, n: dict) -> list:
+    """The budget table's U row of an item stated by its bound condition (results.json
+    ``details.bound_condition``, :func:`gonio.specs._rate_family.rate_records.table_bound_statement`):
+    "U = a + k·u_rest: a = …, k = …, ν_eff = …, p = 95 %" and U, the k and ν those of the
+    other lines (the ν the results table prints beside the interval)."""
+    d = f"{src}.details.bound_condition"
+    bc = it["details"]["bound_condition"]
+    seg = ["U = a + k·u_rest: a = ", _num(bc["a"], f"{d}.a", "sig3"),
+           ", u_rest = ", _num(bc["u_rest"], f"{d}.u_rest", "sig3"),
+           ", k = ", _num(bc["k_rest"], f"{d}.k_rest", "k")]
+    if n["nu"] is not None:
+        seg += [", ν_eff = ", n["nu"]]
+    if n["p"] is not None:
+        seg += [f", p {p_relation(n['p'])} {n['p']} %"]
+    return [it["clause"], "U", seg, "", _num(bc["U"], f"{d}.U", "U")]
 
 
 #: Budget components an analysis names by a word (its machine name in results.json), written

@@ -114,6 +114,88 @@ def rate_table_line(symbol: str, u_stated: float | None, source: str):
     return from_u(symbol, 0.0, float(u_stated), type="B", source=source)
 
 
+#: ``k_source`` of a rate item stated by its bound condition (:func:`table_bound_statement`):
+#: the formula the shared legend recognises (``gonio.report.stated.K_SOURCE_BOUND_PREFIX``,
+#: the triad's statement of the same kind), no words.
+K_SOURCE_BOUND = "U = a + k·u"
+
+#: What a rate item stated by its bound condition keeps in its details (the parts of U).
+BOUND_CONDITION_BASIS = (
+    "bound condition: the bounded lines (the rate table at JJF 1535 Table 2's 0.05 %, no "
+    "certificate u stated; the gyro's temperature error at the set point) at their bounds "
+    "with one sign, added linearly, a = Σ|c_i|·a_i, plus k·u of the other lines, "
+    "U = a + t_95(ν_rest)·u_rest (JCGM 100 4.3.7, 6.2); holds at least 95 % at every "
+    "condition within the bounds")
+
+
+def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict):
+    """The one statement of a rate item into which the rate table's relative error enters
+    (JJF 1535 7.2.1 K, Annex A u₁; IEC 62047-20 5.1.3.1 a_BASE, 5.1.3.2), one reading of
+    what a laboratory that states no certificate u for its table can certify:
+
+    - the readings state ``rate_table_u_rel`` (``u_stated`` not None): ``u``, the GUM
+      budget (JCGM 100, U = k·u_c) unchanged — the table's line is a state of knowledge
+      (:func:`rate_table_line`);
+    - they state none: the table's error is known only as JJF 1535 Table 2's bound, and the
+      procedure allows it at that bound together with the other bounded lines of the
+      budget (``bounded``: {symbol: half-width a_i in the input's unit}; the gyro's
+      temperature error e_TU at its deviation + place bound) with one sign. Their bounds
+      add linearly (the worst-condition rule, docs/validation-rate.md): a = Σ|c_i|·a_i, c_i
+      the budget's sensitivities (first order); the other lines give u_rest (root sum
+      square) and ν_rest (Welch–Satterthwaite, JCGM 100 G.4.1), so
+
+          U = a + t_95(ν_rest)·u_rest  (k_rest from ν_rest as stated, :func:`coverage_k`),
+
+      and P(|offset + e| ≤ U) ≥ P(|e| ≤ k_rest·u_rest) = 95 % for every offset |offset| ≤ a
+      (JCGM 100 4.3.7 for the bounds, 6.2 for k) — where a root-sum-square k·u_c of a
+      bounded line at its bound covers as little as 84 % (one line) and 0 % (the table and
+      e_TU at once: IEC a_BASE in the worst case). Stated by its interval value ± U, ν_rest
+      printed, no k (U is no multiple of u_c; u_c stays the budget's, for the budget table
+      and the items computed with it); the parts in the returned dict for the details.
+
+    >>> from uncertainty import from_u, type_b
+    >>> from gonio.result.gum import gum
+    >>> ins = [from_u("x", 1.0, 0.0), type_b("e_table", 0.0, 5e-4, "rectangular"),
+    ...        type_b("e_T", 0.0, 4e-4, "rectangular"), from_u("n", 0.0, 1e-4)]
+    >>> g = gum(lambda x, e, f, n: x * (1 + e) * (1 + f) + n, ins)
+    >>> s, d = table_bound_statement(g, 1.0, None, {"e_table": 5e-4, "e_T": 4e-4})
+    >>> round(s.U, 6), s.k, round(d["k_rest"], 2), [round(v, 6) for v in s.interval]
+    (0.001096, None, 1.96, [0.998904, 1.001096])
+    >>> round(g.U, 6)                          # the quadrature's k·u_c, short of a = 0.0009
+    0.000751
+    >>> table_bound_statement(g, 1.0, 2.5e-4, {"e_table": 5e-4})[0] is g
+    True
+    """
+    import dataclasses
+
+    from gonio.result.statement import coverage_k
+
+    if u_stated is not None:
+        return u, {}
+    rows = {str(c.get("symbol")): c for c in u.components}
+    missing = sorted(set(bounded) - set(rows))
+    if missing:
+        raise GonioError(f"bound-condition statement: budget has no line {missing[0]!r}")
+    a = sum(abs(float(rows[s].get("c") or 0.0)) * float(h) for s, h in bounded.items())
+    rest = [c for s, c in rows.items() if s not in bounded and (c.get("contribution") or 0) > 0]
+    u_rest = math.sqrt(sum(float(c["contribution"]) ** 2 for c in rest))
+    den = sum(float(c["contribution"]) ** 4 / float(c["dof"]) for c in rest
+              if c.get("dof") is not None and math.isfinite(float(c["dof"])))
+    nu_rest = u_rest ** 4 / den if den > 0 else math.inf
+    p = u.coverage_probability or 0.95
+    k = coverage_k(nu_rest, p) if u_rest > 0 else 0.0
+    big_u = a + k * u_rest
+    parts = {"a": a, "a_lines": {s: abs(float(rows[s].get("c") or 0.0)) * float(h)
+                                 for s, h in bounded.items()},
+             "u_rest": u_rest, "nu_rest": nu_rest, "k_rest": k, "U": big_u,
+             "U_quadrature": u.U, "k_quadrature": u.k, "basis": BOUND_CONDITION_BASIS}
+    return dataclasses.replace(
+        u, U=big_u, k=None, nu_eff=nu_rest, coverage_probability=p, k_source=K_SOURCE_BOUND,
+        interval=(float(value) - big_u, float(value) + big_u),
+        u_c_of="the GUM budget (the bounded lines as rectangular distributions); the "
+               "bound-condition interval is the statement"), parts
+
+
 def protocol_named(rd: RateReadings, protocol, default: str):
     """The protocol to use: ``protocol`` when given, else the one the readings'
     ``# protocol:`` names (:func:`gonio.resources.readings_protocol`: never ignored, an

@@ -27,7 +27,9 @@ from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.result.statement import K_SOURCE_SELECTED_MAX
 from gonio.specs._rate_family.rate_records import (RateContext, static_output, static_rate_dph,
-                                                   segment_means, segment_samples, rate_table_line)
+                                                   segment_means, segment_samples, rate_table_line,
+                                                   table_bound_statement,
+                                                   TABLE2_RATE_ACCURACY_REL)
 from gonio.units import S_PER_H
 from gonio.specs.iec62047_20.keys import ITEM_ROWS
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b, welch_satterthwaite
@@ -242,15 +244,29 @@ def scale_factor(ctx: Context) -> Item:
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
     the rate table and the voltmeter (relative), and the gyro's temperature error at T_BASE
     (:func:`gyro_temperature_bound_c`: the chamber's deviation and the gyro's place in its
-    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`)."""
+    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`). Where the readings state no
+    certificate u for the table, stated by the bound condition (:func:`_bound_statement`)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     u = gum(lambda a, et, ea, eTU: a * (1 + ea) * (1 + eTU) / (1 + et), _u_rel_sf(ctx, c))
+    u, bc = _bound_statement(ctx, u, c["a"])
     return Item("scale_factor", t, cl, un, c["a"], uncertainty=u,
-                details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"]})
+                details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"],
+                         **({"bound_condition": bc} if bc else {})})
+
+
+def _bound_statement(ctx: Context, u, value: float):
+    """The statement of an item with :func:`_u_rel_sf`'s budget: where the readings state no
+    certificate u for the rate table, the table's bound (e_table) and the gyro's
+    temperature error at T_BASE (e_TU), both bounded and allowed at once, added linearly
+    (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`); otherwise the
+    GUM budget's U = k·u_c."""
+    return table_bound_statement(u, value, ctx.rate_table_u_rel, {
+        "e_table": TABLE2_RATE_ACCURACY_REL,
+        "e_TU": gyro_temperature_bound_c(ctx) * abs(sf_tc_rel(ctx))})
 
 
 def initial_sf_variation(ctx: Context) -> Item:
@@ -263,8 +279,10 @@ def initial_sf_variation(ctx: Context) -> Item:
     ins = _u_rel_sf(ctx, c)
     u = gum(lambda a, et, ea, eTU: 100 * (a * (1 + ea) * (1 + eTU) / (1 + et)
                                           - ctx.a_typ) / ctx.a_typ, ins)
-    return Item("initial_sf_variation", t, cl, un, 100 * (c["a"] - ctx.a_typ) / ctx.a_typ,
-                uncertainty=u, details={"a_TYP": ctx.a_typ})
+    value = 100 * (c["a"] - ctx.a_typ) / ctx.a_typ
+    u, bc = _bound_statement(ctx, u, value)
+    return Item("initial_sf_variation", t, cl, un, value, uncertainty=u,
+                details={"a_TYP": ctx.a_typ, **({"bound_condition": bc} if bc else {})})
 
 
 def linearity(ctx: Context) -> Item:

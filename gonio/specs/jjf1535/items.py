@@ -30,7 +30,8 @@ from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
                                                    segment_samples, sf_calibration_means,
-                                                   rate_table_line)
+                                                   rate_table_line, table_bound_statement,
+                                                   TABLE2_RATE_ACCURACY_REL)
 from gonio.units import S_PER_H
 from gonio.specs.jjf1535.keys import ITEM_ROWS
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b
@@ -175,7 +176,9 @@ def scale_factor(ctx: Context) -> Item:
 
     Budget (Annex A.1 structure, from the calibration's own data): u₁ rate table
     (relative, its certificate), u₂ acquisition (relative), u₃ repeatability of the mean
-    s(K_m)/√Q (type A, ν = Q − 1).
+    s(K_m)/√Q (type A, ν = Q − 1). Where the readings state no certificate u for the table
+    (its Table 2 bound alone), stated by the bound condition U = a + k·u of the rest
+    (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`).
     """
     title, clause, unit = "scale factor K", "7.2.1", f"{ctx.output_unit}/(°/s)"
     miss = _need(ctx, "scale_factor", "scale_factor", title, clause, unit)
@@ -197,7 +200,11 @@ def scale_factor(ctx: Context) -> Item:
                      source="data acquisition, relative (u2)"),
               u3]
     u = gum(lambda k, et, ea, s: (k + s) * (1 + ea) / (1 + et), inputs)
+    # no certificate u for the table: its Table 2 bound added linearly to k·u of the rest
+    u, bc = table_bound_statement(u, Kbar, ctx.rate_table_u_rel,
+                                  {"e_table": TABLE2_RATE_ACCURACY_REL})
     return Item("scale_factor", title, clause, unit, Kbar, uncertainty=u, details={
+        **({"bound_condition": bc} if bc else {}),
         "K_m": Ks, "F0_m": [c["fit"].F0 for c in cals], "rest_m": [c["rest"] for c in cals],
         "se_K_m": [c["se_K"] for c in cals], "Q": Q,
         "rates_dps": cals[0]["rates"], "means_m": [c["fit"].means for c in cals],
