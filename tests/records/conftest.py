@@ -185,17 +185,23 @@ def people(store):
 
 @pytest.fixture(autouse=True)
 def pipeline_memo(request, monkeypatch):
-    """The records' pipeline call behind an in-process memo keyed by the SHA-256 of every
-    input (tests/records/pipeline_memo.py): an import computes its folder's result again, and
-    these tests import the same folders many times. ``@pytest.mark.real_pipeline``: without."""
+    """The records' pipeline call and the certificate's rendering behind in-process memos
+    keyed by the SHA-256 of every input (tests/records/pipeline_memo.py): an import computes
+    its folder's result again, an issue renders the stored result again, and these tests
+    import the same folders and issue the same result with the same details many times (the
+    worker's calls too: its draft's pipeline, its issue's and redraft's rendering).
+    ``@pytest.mark.real_pipeline``: without."""
     if request.node.get_closest_marker("real_pipeline"):
         return
-    from gonio.records import compute
+    from gonio.records import compute, worker
 
-    from .pipeline_memo import memoised
+    from .pipeline_memo import memoised, memoised_render
 
     real = getattr(compute.calibrate_folder, "__wrapped__", compute.calibrate_folder)
     monkeypatch.setattr(compute, "calibrate_folder", memoised(real))
+    monkeypatch.setattr(worker, "calibrate_folder", memoised(real))
+    render = getattr(worker.render_folder, "__wrapped__", worker.render_folder)
+    monkeypatch.setattr(worker, "render_folder", memoised_render(render))
 
 
 @pytest.fixture(scope="session")

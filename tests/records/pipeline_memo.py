@@ -118,3 +118,67 @@ def memoised(real, memo: dict | None = None, stats: dict | None = None):
         return returned
     calibrate_folder.__wrapped__ = real
     return calibrate_folder
+
+
+# ---------------------------------------------------------------------------------------------
+# The certificate's rendering (:func:`gonio.records.compute.render_folder`): every issue, every
+# draft rendered again after an attach renders the stored results.json with the laboratory
+# details of the moment (about 5 s of PDF and figures each). The records tests issue the
+# session's one computed result again and again with the same details (the same certificate
+# number, people, dates, on SQLite and on PostgreSQL): the same bytes each time. Rendering is a
+# pure function of the stored result's bytes, the laboratory file (and the files beside it),
+# the specification and the language (the standards: the renderer is a pure function of the
+# stored Result); the key is the SHA-256 of these, gonio's version, the ``GONIO_*`` variables
+# and today's date, and the same rules as the pipeline's memo hold (an output naming a folder
+# is not kept, a filled ``out`` renders, a failure is never stored).
+
+_RENDER_MEMO: dict[str, tuple[dict[str, bytes], object]] = {}
+RENDER_STATS = {"hits": 0, "misses": 0}
+
+
+def render_key(results: bytes, *, spec_key: str, lab, lang: str = "en") -> str:
+    """The SHA-256 of every input :func:`gonio.records.compute.render_folder` reads."""
+    h = hashlib.sha256()
+    _add(h, "gonio", gonio.__version__.encode())
+    _add(h, "spec", str(spec_key).encode())
+    _add(h, "lang", str(lang).encode())
+    _add(h, "results", bytes(results))
+    lab = Path(lab)
+    _add(h, "lab:" + lab.name, lab.read_bytes())
+    for q in sorted(lab.parent.iterdir()):            # the files beside it (it may name them)
+        if q.is_file() and q.stat().st_size < 2**24:
+            _add(h, "lab-beside:" + q.name, q.read_bytes())
+    env = {k: v for k, v in os.environ.items() if k.startswith("GONIO_")}
+    _add(h, "env", json.dumps(env, sort_keys=True).encode())
+    _add(h, "date", dt.date.today().isoformat().encode())
+    return h.hexdigest()
+
+
+def memoised_render(real, memo: dict | None = None, stats: dict | None = None):
+    """``real`` (render_folder's signature) behind the memo (this process's one, or ``memo``;
+    hits and misses counted in ``stats``)."""
+    memo = _RENDER_MEMO if memo is None else memo
+    stats = RENDER_STATS if stats is None else stats
+
+    def render_folder(results, out, *, spec_key, lab, lang="en"):
+        kw = dict(spec_key=spec_key, lab=lab, lang=lang)
+        out = Path(out)
+        if (out.exists() and any(out.iterdir())) or not Path(lab).is_file():
+            return real(results, out, **kw)              # not the case the memo knows
+        key = render_key(results, **kw)
+        if key in memo:
+            stats["hits"] += 1
+            files, returned = memo[key]
+            for name, data in files.items():
+                (out / name).parent.mkdir(parents=True, exist_ok=True)
+                (out / name).write_bytes(data)
+            return list(returned) if isinstance(returned, list) else returned
+        stats["misses"] += 1
+        returned = real(results, out, **kw)
+        files = {p.relative_to(out).as_posix(): p.read_bytes()
+                 for p in sorted(out.rglob("*")) if p.is_file()}
+        if not names_a_folder(files, lab, out):
+            memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
+        return returned
+    render_folder.__wrapped__ = real
+    return render_folder

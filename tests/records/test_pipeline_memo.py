@@ -1,4 +1,5 @@
-"""The records tests' in-process memo of the pipeline (tests/records/pipeline_memo.py): the
+"""The records tests' in-process memos of the pipeline and of the certificate's rendering
+(tests/records/pipeline_memo.py). The pipeline's: the
 same inputs, wherever they lie, give the stored output files without running the pipeline;
 one changed byte of any input (readings, a file beside them, protocol, laboratory file,
 table calibration), another option, record, specification, ``GONIO_*`` variable runs it; an
@@ -17,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from .conftest import SMALL_PROTOCOL
-from .pipeline_memo import memoised
+from .pipeline_memo import memoised, memoised_render
 
 pytestmark = pytest.mark.real_pipeline        # each test builds its own memo
 
@@ -168,3 +169,120 @@ def test_a_changed_file_an_option_or_the_lab_names_misses(tmp_path, where):
     named.write_bytes(b"2\n")
     call(fn, kw, tmp_path / "out3")
     assert len(runs) == 2, where
+
+
+# --- the rendering's memo: the same stored result, laboratory file (and the files beside
+# it), specification and language, wherever they lie, give the stored files; one changed
+# byte or argument renders again; an output naming its folders is not kept; the real
+# renderer gives the same bytes from other folders.
+
+def stub_render(runs: list):
+    """A renderer that records each run and writes what it read, hashed."""
+    def render_folder(results, out, *, spec_key, lab, lang="en"):
+        runs.append(Path(lab))
+        h = hashlib.sha256(bytes(results) + Path(lab).read_bytes())
+        h.update(repr((spec_key, lang)).encode())
+        out = Path(out)
+        out.mkdir(parents=True)                  # a filled ``out`` is an error here
+        (out / "certificate.html").write_text(h.hexdigest(), encoding="utf-8")
+        return ["certificate.html"]
+    return render_folder
+
+
+def render_inputs(root: Path) -> dict:
+    root.mkdir(parents=True)
+    (root / "lab.toml").write_bytes(b"[laboratory]\nname = 'L'\n")
+    (root / "logo.svg").write_bytes(b"<svg/>")
+    return dict(results=b'{"items": {}}', spec_key="ogam-draft", lab=root / "lab.toml",
+                lang="en")
+
+
+def render_call(fn, kw: dict, out: Path):
+    kw = dict(kw)
+    return fn(kw.pop("results"), out, **kw)
+
+
+def test_render_same_inputs_elsewhere_hit_and_give_the_same_files(tmp_path):
+    runs, stats = [], {"hits": 0, "misses": 0}
+    fn = memoised_render(stub_render(runs), {}, stats)
+    got1 = render_call(fn, render_inputs(tmp_path / "a"), tmp_path / "out1")
+    got2 = render_call(fn, render_inputs(tmp_path / "b"), tmp_path / "out2")
+    assert len(runs) == 1 and stats == {"hits": 1, "misses": 1}
+    assert got1 == got2 == ["certificate.html"]
+    assert (tmp_path / "out1" / "certificate.html").read_bytes() == \
+        (tmp_path / "out2" / "certificate.html").read_bytes()
+
+
+@pytest.mark.parametrize("change", ["results", "lab", "beside", "spec", "lang", "env"])
+def test_render_a_changed_byte_or_argument_misses(tmp_path, monkeypatch, change):
+    runs = []
+    fn = memoised_render(stub_render(runs), {}, {"hits": 0, "misses": 0})
+    render_call(fn, render_inputs(tmp_path / "a"), tmp_path / "out1")
+    kw = render_inputs(tmp_path / "b")
+    if change == "results":
+        kw["results"] = b'{"items": {"K": 1}}'
+    elif change == "lab":
+        kw["lab"].write_bytes(kw["lab"].read_bytes() + b" ")
+    elif change == "beside":
+        (kw["lab"].parent / "logo.svg").write_bytes(b"<svg />")
+    elif change == "spec":
+        kw["spec_key"] = "jjf1535-2015"
+    elif change == "lang":
+        kw["lang"] = "zh"
+    else:
+        monkeypatch.setenv("GONIO_MAX_WORKERS", "3")
+    render_call(fn, kw, tmp_path / "out2")
+    assert len(runs) == 2, change
+
+
+def test_render_output_naming_its_folder_is_not_kept_nor_a_filled_out(tmp_path):
+    runs = []
+    stub = stub_render(runs)
+
+    def naming(results, out, **kw):
+        got = stub(results, out, **kw)
+        (Path(out) / "certificate.html").write_text(f"lab {kw['lab']}", encoding="utf-8")
+        return got
+    fn = memoised_render(naming, {}, {"hits": 0, "misses": 0})
+    kw = render_inputs(tmp_path / "a")
+    render_call(fn, kw, tmp_path / "out1")
+    render_call(fn, kw, tmp_path / "out2")
+    assert len(runs) == 2
+    fn = memoised_render(stub, {}, {"hits": 0, "misses": 0})
+    render_call(fn, kw, tmp_path / "out3")
+    (tmp_path / "out4").mkdir()
+    (tmp_path / "out4" / "old.txt").write_text("x", encoding="utf-8")
+    with pytest.raises(FileExistsError):      # the stub's own answer: the memo stood aside
+        render_call(fn, kw, tmp_path / "out4")
+
+
+def test_the_real_renderer_gives_the_same_bytes_from_other_folders(computed_folder, tmp_path):
+    """computed_folder's results.json rendered with the example laboratory file
+    (protocols/lab-example.toml without its decision rule and limits: the computed folder was
+    decided without them) in two other folders through the memo (the second a hit), and once
+    more by the real renderer without it: every file of the three folders is byte for byte
+    the same."""
+    from gonio.records.compute import render_folder
+
+    real = getattr(render_folder, "__wrapped__", render_folder)
+    stats = {"hits": 0, "misses": 0}
+    fn = memoised_render(real, {}, stats)
+    results = (computed_folder / "results.json").read_bytes()
+    example = (SMALL_PROTOCOL.parents[2] / "protocols" / "lab-example.toml").read_text("utf-8")
+    example = example[:example.index("\n# Statement of conformity") + 1]
+    outs = []
+    for name in ("b", "c", "d"):
+        (tmp_path / name).mkdir()
+        lab = tmp_path / name / "lab.toml"
+        lab.write_text(example, encoding="utf-8")
+        outs.append(tmp_path / name / "out")
+        (fn if name != "d" else real)(results, outs[-1], spec_key="ogam-draft", lab=lab)
+    assert stats == {"hits": 1, "misses": 1}
+    files = sorted(p.relative_to(outs[2]).as_posix() for p in outs[2].rglob("*")
+                   if p.is_file())
+    assert "certificate.pdf" in files and "certificate.html" in files
+    for out in outs[:2]:
+        assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")
+                      if p.is_file()) == files
+        for name in files:
+            assert (out / name).read_bytes() == (outs[2] / name).read_bytes(), name
