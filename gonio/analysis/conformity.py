@@ -674,7 +674,10 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
         and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
     if chi2:
+        # ν as stated (integer part); stated ∞ (above 1000): the computed ν, as the interval
+        # itself keeps it (gonio.result.gum.dispersion_uncertainty)
         nu = stated_nu(unc.nu_eff)
+        nu = float(unc.nu_eff) if math.isinf(nu) else nu
         p_c = conformance_probability_chi2(float(it.value), nu, bounds.lower, bounds.upper)
         model = f"chi-square, nu = {nu:g}"
     else:

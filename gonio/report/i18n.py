@@ -185,11 +185,11 @@ LABELS: dict[str, dict[str, str]] = {
     "k_iv_head": {"en": "An item stated by an interval has that one statement, shown in the "
                         "result with its probability, and no U and no k: {kinds}.",
                   "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k：{kinds}。"},
-    "k_iv_chi2": {"en": "a standard deviation of a few repeats (a repeatability, a stability) by "
-                        "its one-sided 95 % upper limit (σ's χ² distribution, JCGM 100 E.4.3), "
-                        "on which any conformity decision is made",
-                  "zh": "少数重复测量的标准偏差（重复性、稳定性）给出其单侧 95 % 上限（标准偏差按 χ² "
-                        "分布，JCGM 100 E.4.3），对上限的判定亦以此为据"},
+    "k_iv_chi2": {"en": "a standard deviation (a repeatability, a stability, a noise rms) by "
+                        "its one-sided 95 % upper limit (σ's χ² distribution with the ν_eff shown, "
+                        "JCGM 100 E.4.3), on which any conformity decision is made",
+                  "zh": "标准偏差（重复性、稳定性、噪声均方根）给出其单侧 95 % 上限（标准偏差按所示 "
+                        "ν_eff 的 χ² 分布，JCGM 100 E.4.3），对上限的判定亦以此为据"},
     "k_iv_range": {"en": "a half range by its one-sided 95 % upper limit (the range of normal "
                          "values)",
                    "zh": "半极差给出其单侧 95 % 上限（按正态极差分布）"},

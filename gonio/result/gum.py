@@ -1,11 +1,12 @@
 """An item's uncertainty from its budget: the GUM propagation of a budget into the one
 :class:`~gonio.result.model.Uncertainty` an item states (JCGM 100, with k from ν_eff), its
 JCGM 101 Monte Carlo validation when a calibration asks for it, and the uncertainty of a
-standard deviation (a repeatability, a noise level) stated by its one-sided χ² interval, and
+standard deviation (a repeatability, a noise level) stated by its one-sided χ² interval
+(:func:`std_dev_uncertainty` from ν, :func:`dispersion_uncertainty` from a budget), and
 the interval of a magnitude max_i |x_i| (:func:`max_magnitude_statement`).
 
-The kit re-exports :func:`gum`, :func:`monte_carlo_validation` and
-:func:`std_dev_uncertainty` (``gonio.kit``; docs/kit.md#uncertainty-the-gum-model-contract);
+The kit re-exports :func:`gum`, :func:`monte_carlo_validation`,
+:func:`std_dev_uncertainty` and :func:`dispersion_uncertainty` (``gonio.kit``; docs/kit.md#uncertainty-the-gum-model-contract);
 every specification whose items carry such budgets, built in or a plug-in, calls these.
 """
 
@@ -112,6 +113,35 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
            "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
     return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
                        "chi-square", interval=(0.0, s + U))
+
+
+
+def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
+    """A dispersion ``s`` (a standard deviation, a root mean square of noise) whose standard
+    uncertainty comes from its own budget ``u`` (JJF 1535 7.2.10's bias stability: a mean of
+    records' block-mean spreads with their effective ν; IEC 62047-20 5.4.5.1's in-band and
+    broadband rms: a Welch estimate's scatter and the chamber's fluctuation), stated as a
+    standard deviation is (:func:`std_dev_uncertainty`): by its one-sided χ² 95 % interval
+    [0, s·√(ν/χ²_0.05,ν)] alone, with ν = ½ (s/u_c)² (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read
+    backwards: the ν of a standard deviation whose χ² spread is u_c). ν is stated as its
+    integer part (∞ above 1000, the limit then keeps the computed ν). No k; U is the distance
+    to the upper limit (the guard band of the decision,
+    :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution with that
+    ν). The budget's rows and u_c are kept. ``s`` not above 0 or no u_c: ``u`` as it is.
+
+    >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
+    >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
+    (119.9, None, [0.0, 53.78], 'chi-square')
+    """
+    from gonio.result.statement import stated_nu
+
+    if not (s > 0 and u.u_c > 0):
+        return u
+    nu = 0.5 * (s / u.u_c) ** 2
+    nu_s = stated_nu(nu)
+    U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
+    return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
+                       interval=(0.0, s + U))
 
 
 #: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of

@@ -26,7 +26,8 @@ from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.stream import value_range
-from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
+from gonio.result.gum import (dispersion_uncertainty, gum, max_magnitude_statement,
+                              std_dev_uncertainty)
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
                                                    segment_samples, sf_calibration_means,
@@ -668,34 +669,6 @@ def bias(ctx: Context) -> Item:
         "null_output": ctx.null_output})
 
 
-def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
-    """A dispersion whose standard uncertainty comes from its own budget ``u`` (JJF 7.2.10
-    bias stability: the mean of Q records' standard deviations of block means, its sampling
-    term with the records' effective ν, and the scale factor), stated as a standard deviation
-    is: by its one-sided χ² 95 % interval [0, s·√(ν/χ²_0.05,ν)] alone, as
-    :func:`gonio.result.gum.std_dev_uncertainty` states one, with ν = ½ (s/u_c)²
-    (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read backwards: the ν of a standard deviation whose
-    χ² spread is u_c). ν is stated as its integer part (∞ above 1000, the limit then keeps
-    the computed ν). No k; U is the distance to the upper limit (the guard band of the
-    decision, :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution
-    with that ν). The budget's rows and u_c are kept.
-
-    >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
-    >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
-    (119.9, None, [0.0, 53.78], 'chi-square')
-    """
-    from gonio.result.gum import std_upper_half_width
-    from gonio.result.statement import stated_nu
-
-    if not (s > 0 and u.u_c > 0):
-        return u
-    nu = 0.5 * (s / u.u_c) ** 2
-    nu_s = stated_nu(nu)
-    U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
-    return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
-                       interval=(0.0, s + U))
-
-
 def bias_stability(ctx: Context) -> Item:
     """JJF 1535 7.2.10 eqs (18), (19): B_s,m = s(P-sample block means)/K of each record, °/h,
     combined as their root mean square √(mean B_s,m²) (reading taken). Eq (19) as printed
@@ -709,7 +682,7 @@ def bias_stability(ctx: Context) -> Item:
     (:func:`gonio.specs._rate_family.formulas.bias_stability_dof`: the block means'
     variogram fitted by white, flicker and random-walk noise; Satterthwaite), and the scale
     factor. B_s is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone
-    with ν = ½(B_s/u_c)² (:func:`dispersion_uncertainty`), as K_r and B_r are: no k, no
+    with ν = ½(B_s/u_c)² (:func:`gonio.result.gum.dispersion_uncertainty`), as K_r and B_r are: no k, no
     "± U". The spread of the Q = 3 values (ν = 2) is kept in the details; it does not set the
     interval."""
     title, clause, unit = "bias stability B_s", "7.2.10", "°/h"

@@ -1,0 +1,160 @@
+"""A noise rms is a dispersion and is stated as one: IEC 62047-20 5.4.5.1 b) in-band and
+c) broadband rms by the one-sided χ² 95 % interval of :func:`gonio.kit.dispersion_uncertainty`
+(ν = ½(rms/u_c)², no k, no "± U"), as JJF's B_s; IEC 5.3.3.4's half range by the normal
+range's interval with no k and no ν. Checked against scipy.stats.chi2 and a Monte Carlo of
+white-noise records whose true band rms is known in closed form."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from gonio.kit import dispersion_uncertainty, from_u, gum, item_statement
+from gonio.result.model import Uncertainty
+
+
+def _chi2_upper(s: float, u_c: float) -> tuple[float, float]:
+    """ν = ½(s/u_c)² (JCGM 100 E.4.3 read backwards) and σ's one-sided 95 % upper limit."""
+    nu = 0.5 * (s / u_c) ** 2
+    nu_s = math.inf if nu > 1000 else max(1.0, math.floor(nu))
+    return nu, s * math.sqrt((nu if math.isinf(nu_s) else nu_s) / stats.chi2.ppf(0.05, nu if
+                                                                                  math.isinf(nu_s)
+                                                                                  else nu_s))
+
+
+@pytest.mark.parametrize("s,u_c", [(1.0, 0.5), (48.0, 3.1), (0.0855, 2.6e-4), (2.0, 0.21)])
+def test_dispersion_interval_is_the_chi2_upper_limit(s, u_c):
+    u = dispersion_uncertainty(s, Uncertainty([], u_c, 2 * u_c, 2.0, 30.0, None, 0.95))
+    nu, hi = _chi2_upper(s, u_c)
+    assert u.k is None and u.k_source == "chi-square" and u.coverage_probability == 0.95
+    assert u.nu_eff == pytest.approx(nu, rel=1e-12)
+    assert u.interval[0] == 0.0 and u.interval[1] == pytest.approx(hi, rel=1e-10)
+    assert u.U == pytest.approx(hi - s, rel=1e-9) and u.u_c == u_c
+    text = item_statement({"value": s, "unit": "°/s", "measured": True, "nonnegative": True,
+                           "uncertainty": u.to_json()}).text()
+    assert " ± " not in text and "k =" not in text and "p = 95 %" in text, text
+
+
+def test_dispersion_of_zero_or_without_u_is_left_alone():
+    u = Uncertainty([], 0.0, 0.0, 1.96, None, None, 0.95)
+    assert dispersion_uncertainty(0.3, u) is u
+    assert dispersion_uncertainty(0.0, Uncertainty([], 0.1, 0.2, 2.0, 5.0, None, 0.95)).k == 2.0
+
+
+def test_band_rms_upper_bound_covers_white_noise():
+    """The in-band item's chain (gonio's Welch density, the band rms, the Welch estimate's
+    own u with ν = ½/u_rel², the GUM budget, the χ² statement) on 400 white-noise records of
+    2¹⁵ samples: the true band rms σ·√(2Δt(f_hi − f_lo)) lies at or below the stated upper
+    end in 95 % of records (Clopper–Pearson interval holding 0.95); the broadband item's
+    u_rel = 1/√(segments × lines) is larger, and its upper end covers at least as often
+    (Clopper–Pearson upper end ≥ 0.95). The upper end is never below the estimate."""
+    from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
+    from gonio.specs.iec62047_20 import formulas as ief
+
+    rng = np.random.default_rng(54512)
+    dt, n, nper, sigma, f_lo, f_hi = 0.01, 2 ** 15, 4096, 0.7, 10.0, 40.0
+    truth = sigma * math.sqrt(2.0 * dt * (f_hi - f_lo))
+    trials, hits, hits_bb = 400, 0, 0
+    nseg = 2 * n // nper - 1
+
+    def stated(rms, u_rel):
+        return dispersion_uncertainty(rms, gum(lambda r: r, [
+            from_u("rms", rms, rms * u_rel, dof=0.5 / u_rel ** 2)]))
+
+    for _ in range(trials):
+        x = rng.normal(0.0, sigma, n)
+        f, p = welch_psd(x, 1.0 / dt, nper)
+        d = ief.broadband_noise_iec(f, p, f_lo, f_hi)
+        sel = (f >= f_lo) & (f <= f_hi) & (p > 0)
+        u = stated(d["rms_dps"], welch_band_rms_u_rel(n, nper, p[sel], float(f[1] - f[0])))
+        assert u.k is None and u.interval[1] > d["rms_dps"]
+        hits += truth <= u.interval[1]
+        hits_bb += truth <= stated(d["rms_dps"], 1.0 / math.sqrt(nseg * d["lines"])).interval[1]
+    ci = stats.binomtest(hits, trials, 0.95).proportion_ci(0.95)
+    assert ci.low <= 0.95 <= ci.high, (hits / trials, ci)
+    assert hits_bb >= hits
+    assert stats.binomtest(hits_bb, trials, 0.95).proportion_ci(0.95).high >= 0.95
+
+
+@pytest.fixture(scope="module")
+def iec_noisy(tmp_path_factory):
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_rate_iec_items import small_protocol
+
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
+
+    tmp = tmp_path_factory.mktemp("iecnoise")
+    proto = small_protocol(tmp, "iec62047-20")
+    res = simulate(study_bench(), str(proto), seed=3, noise=True)
+    rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+    return calibrate(rd, str(proto)), res.truth["items"]
+
+
+@pytest.mark.parametrize("key", ["inband_noise", "broadband_noise"])
+def test_iec_noise_rms_stated_by_chi2_interval(iec_noisy, key):
+    """The item's one statement is [0, rms·√(ν/χ²_0.05,ν)], ν = ½(rms/u_c)² from its own
+    budget (scipy.stats.chi2); no k; the bench's true rms lies below the upper end."""
+    result, truth = iec_noisy
+    it = result.items[key]
+    u = it.uncertainty
+    nu, hi = _chi2_upper(it.value, u.u_c)
+    assert u.k is None and u.k_source == "chi-square"
+    assert u.nu_eff == pytest.approx(nu, rel=1e-12)
+    assert u.interval == (0.0, pytest.approx(hi, rel=1e-10))
+    assert truth[key]["value"] <= u.interval[1]
+    st = item_statement(it, nonnegative=True)
+    assert st.U is None and st.k is None and st.upper is not None and " ± " not in st.text()
+
+
+def test_iec_broadband_row_nu_is_the_one_its_u_implies(iec_noisy):
+    """The broadband rms's Welch row: u_rel = 1/√(segments × lines) with the ν of a standard
+    deviation of that spread, ½/u_rel² (not segments × lines, twice that), so the row's ν
+    and the statement's ν = ½(rms/u_c)² tell one story."""
+    result, _ = iec_noisy
+    it = result.items["broadband_noise"]
+    row = next(c for c in it.uncertainty.components if c["symbol"] == "rms")
+    u_rel = row["u"] / it.value
+    assert row["dof"] == pytest.approx(0.5 / u_rel ** 2, rel=1e-9)
+    assert u_rel ** -2 == pytest.approx(round(u_rel ** -2), abs=1e-6)   # segments × lines
+    assert round(u_rel ** -2) % it.details["lines"] == 0
+
+
+def test_iec_half_range_states_no_k_and_no_nu(iec_noisy):
+    """5.3.3.4: the interval is the normal range's for n records, not a t or χ² of some ν:
+    the row prints "—" for k and ν_eff, never ν 2 beside no k."""
+    from gonio.specs.iec62047_20.formulas import half_range_upper
+
+    result, _ = iec_noisy
+    it = result.items["bias_repeatability"]
+    u = it.uncertainty
+    assert u.k is None and u.nu_eff is None and u.interval[0] == 0.0
+    n = int(u.components[0]["dof"]) + 1
+    assert u.interval[1] == pytest.approx(half_range_upper(it.value, n), rel=1e-12)
+    st = item_statement(it, nonnegative=True)
+    assert st.k is None and st.nu_eff is None and st.upper is not None
+
+
+def test_decision_on_a_chi2_interval_with_nu_stated_infinite():
+    """A noise rms's ν is often above 1000 (stated ∞): its decision takes σ's χ²
+    distribution with the computed ν, P(σ ≤ T) = χ²_ν.sf(ν s²/T²) (scipy), not an error."""
+    from gonio.analysis.conformity import decide_items
+    from gonio.result.model import Item, Result
+
+    s = 0.0856
+    u = dispersion_uncertainty(s, Uncertainty([], 2.6e-4, 5e-4, 1.96, 5e4, None, 0.95))
+    assert u.nu_eff > 1000
+    r = Result("s", "S", {"broadband_noise": Item("broadband_noise", "broadband", "5.4.5.1 c)",
+                                                   "°/s", s, uncertainty=u, nonnegative=True)},
+               {}, {})
+    (c,) = decide_items(r, [{"item": "broadband_noise", "upper": 0.0862}], {"rule": "guarded"})
+    assert c.outcome == "pass", c
+    want = stats.chi2.sf(u.nu_eff * s * s / 0.0862 ** 2, u.nu_eff)
+    assert c.conformance_probability == pytest.approx(want, rel=1e-9)
