@@ -373,9 +373,10 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
             phrase = kinds.get(it["uncertainty"]["k_source"])
             if phrase:
                 assert phrase[n] in legend, (lang, key, phrase[n])
-                # the item's clause stands in the bracket after its kind's phrase
+                # the item's clause stands in the bracket after its kind's phrase (a clause
+                # may hold a letter: IEC "5.4.5.1 b)")
                 part = legend[legend.index(phrase[n]):]
-                bracket = re.search(r"[（(]([0-9., ()（）]+?)[)）](?:[;；.。]|$)", part)
+                bracket = re.search(r"[（(]([0-9a-z., ()（）、，]+?)[)）](?:[;；.。]|$)", part)
                 assert bracket and clause in bracket.group(1), (lang, key, part[:300])
 
 
