@@ -2,7 +2,13 @@
 (docs/formats.md#identity-and-conditions): ``gonio db import FOLDER --lab FILE`` with a
 laboratory file whose serial contradicts the readings is refused with one line (exit 2,
 nothing recorded), for every specification; a laboratory file that proceeds is accepted only
-for a folder whose results.json states the contradiction (computed with that file)."""
+for a folder whose results.json states the contradiction (computed with that file).
+
+The commands run in this process (:func:`gonio.cli.main`, its exit code and stderr: what the
+console script returns and prints) but the last import, which runs as its own process
+(``python -m gonio db import``: the command line end to end, as a user runs it; simulate and
+calibrate run so in tests/test_provenance.py). Each process started paid gonio's import
+again (about 1.5 s of CPU each, seven per specification)."""
 
 from __future__ import annotations
 
@@ -11,6 +17,7 @@ import sqlite3
 
 import pytest
 
+from gonio.cli import main
 from tests.test_provenance import LAB_SERIAL, PINS, RUNS, gonio, lab_file
 
 
@@ -19,15 +26,27 @@ def _calibrations(data) -> int:
         return db.execute("select count(*) from calibrations").fetchone()[0]
 
 
+def run_in_process(capsys, *args, rc: int = 0) -> str:
+    """``gonio ARGS`` through :func:`gonio.cli.main` in this process: asserts its exit code
+    ``rc``; returns what it wrote to stderr."""
+    capsys.readouterr()
+    got = main([str(a) for a in args])
+    err = capsys.readouterr().err
+    assert got == rc, err
+    return err
+
+
 @pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
-def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tmp_path):
+def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tmp_path,
+                                                        monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, data = tmp_path / "sim", tmp_path / "data"
-    gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=tmp_path)
+    run_in_process(capsys, "simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim)
     readings = sim / "readings.csv"
-    gonio("calibrate", readings, "--spec", spec, *proto, "--out", tmp_path / "plain",
-          cwd=tmp_path)
-    gonio("db", "init", "--data", data, cwd=tmp_path)
+    run_in_process(capsys, "calibrate", readings, "--spec", spec, *proto, "--out",
+                   tmp_path / "plain")
+    run_in_process(capsys, "db", "init", "--data", data)
     strict = lab_file(tmp_path, name="strict.toml")
     proceed = lab_file(tmp_path, 'on_mismatch = "proceed"', name="proceed.toml")
     for lab in (strict, proceed):      # no standards: the store has none registered
@@ -36,12 +55,12 @@ def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tm
         assert "[[standards]]" not in lab.read_text("utf-8")
     imp = ("db", "import", "--data", data, "--readings", readings, *proto)
     for lab in (strict, proceed):        # the folder was computed without the laboratory file
-        r = gonio(*imp, "--lab", lab, tmp_path / "plain", cwd=tmp_path, rc=2)
-        line = r.stderr.strip()
+        line = run_in_process(capsys, *imp, "--lab", lab, tmp_path / "plain", rc=2).strip()
+        assert line.startswith("gonio: "), line
         assert "\n" not in line and "Traceback" not in line, line
         assert "serial" in line and LAB_SERIAL in line, line
     assert _calibrations(data) == 0
-    gonio("calibrate", readings, "--spec", spec, *proto, "--lab", proceed, "--out",
-          tmp_path / "flagged", cwd=tmp_path)
-    gonio(*imp, "--lab", proceed, tmp_path / "flagged", cwd=tmp_path)
+    run_in_process(capsys, "calibrate", readings, "--spec", spec, *proto, "--lab", proceed,
+                   "--out", tmp_path / "flagged")
+    gonio(*imp, "--lab", proceed, tmp_path / "flagged", cwd=tmp_path)   # its own process
     assert _calibrations(data) == 1
