@@ -596,6 +596,13 @@ def check_recomputed(results: dict, out: Path, res_path: Path) -> None:
         # a protocol file is named by the path the run was given (resources.
         # protocol_provenance); the recomputation reads the same bytes from elsewhere
         mine["protocol"] = theirs["protocol"]
+    # a finding names the readings file by the path the run was given; the recomputation
+    # reads the same readings from its temporary folder (same file name)
+    for f_mine, f_theirs in zip(again.get("findings") or [], results.get("findings") or []):
+        if isinstance(f_mine, dict) and isinstance(f_theirs, dict) and \
+                isinstance(f_mine.get("file"), str) and isinstance(f_theirs.get("file"), str) \
+                and Path(f_mine["file"]).name == Path(f_theirs["file"]).name:
+            f_mine["file"] = f_theirs["file"]
     diff = first_difference(results, again)
     if diff:
         raise GonioError(f"results.json is not what its readings give ({diff}); nothing "
