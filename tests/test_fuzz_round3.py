@@ -103,7 +103,9 @@ def og_screen(tmp_path, lines, name="r.csv"):
     before = sha(p)
     found = screen(read_readings(p), load_protocol(SMALL))
     assert sha(p) == before
-    return found
+    # less the statement of what the median rule could not see in the small programme's
+    # three 7.1 readings (on every file of it: tests/test_ogam_71_median_rule.py)
+    return [f for f in found if not (f.code == "readings-not-judged" and f.clause == "7.1")]
 
 
 # ------------------------------------------------ a folder named like a built-in protocol

@@ -204,6 +204,14 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "{1}，{2} °/s，{3}轴：第 {4} 行的读数仅相互比较：7.4 未在该角速率和轴向上对这些位置各读 {5} "
      "组及以上，没有重复测量的参考说明各位置的读数；该规则只能识别一个偏离的读数，"
      "两个及以上会相互掩盖，并被当作非线性度（K_l）并计入 E"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): readings at lines (.+?) judged only by the median rule "
+     r"\(fewer than (\d+) readings; its floor (\S+)″, widened by the readings' own spread\): a "
+     r"typo in one of them of up to (\S+)″ \(line (\d+), (\S+)°\) would not have been seen; it "
+     r"would move K by up to (\S+) ppm and K_l by up to (\S+) %, and E and every item computed "
+     r"with K with them",
+     "{1}，{2} °/s，{3}轴：第 {4} 行的读数仅按中位数规则判别（读数少于 {5} 个；其下限 {6}″，"
+     "随读数自身的分散而加宽）：其中一个读数若有不超过 {7}″ 的录入错误（第 {8} 行，{9}°）将"
+     "无法被发现；它会使 K 最多改变 {10} ppm、K_l 最多改变 {11} %，E 及所有用 K 计算的项目随之改变"),
     (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
     (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
     (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading; the "

@@ -43,7 +43,10 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
     depart, are judged together against 7.4's rounds at the same stops read in at least
     ``AGREEMENT_SERIES_MIN`` series (an F test; refused naming them), or named in a flagged
     ``readings-not-judged`` finding where no such rounds exist (:func:`reference_agreement`);
-  * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
+  * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``;
+    a 7.1 so judged gets a flagged ``readings-not-judged`` finding stating the largest typo
+    in one reading the rule would not have seen and its effect on K and K_l
+    (:func:`median_rule_limit`).
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
   warm-up, bias instability), so over the 70 min of 7.3 its readings spread beyond the
@@ -741,6 +744,8 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
                         & (rot["orientation"] == key[2])]
             out += reference_agreement(g, ref74, it, what, file, step, alpha,
                                        {f.line for f in found})
+        elif key[0] in ROUND_MAY_GO and not found and len(g) >= 3:
+            out.append(median_rule_limit(g, key[0], what, file))
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         what = f"zero_stability series {int(se)}"
         if len(g) < ZS_NEIGHBOUR_MIN:
@@ -749,6 +754,89 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             out += _rest_outliers(g, what, file, k_ref, _resolution_arcsec(g, k_ref, deg_step),
                                   drift_rate)
     return out
+
+
+def median_rule_blind_arcsec(r_arcsec) -> np.ndarray:
+    """For each reading of a group the median rule judges (:func:`_outliers`), the largest
+    typo added to it alone, ″, with which the rule still finds nothing in the group: the
+    supremum over both signs of the |t| for which ``r + t·e_i`` passes, searched over
+    [0, hi] on a grid of 800 steps and refined by bisection at the last passing step. hi =
+    2 · (spread + max(``ROBUST_Z`` · 1.4826 · spread, ``ANGLE_FLOOR_ARCSEC``)), spread the
+    range of ``r``: beyond it the typo exceeds any threshold the others' spread allows.
+    Where ``r`` itself breaks the rule, zeros (the rule found something). By hand for the
+    example: +t on 0 leaves the median at 0.1 and the threshold at the 5″ floor, found when
+    t − 0.1 > 5; −t on 0.1 leaves the median at −0.1, found when t − 0.2 > 5.
+
+    >>> [round(float(x), 2) for x in median_rule_blind_arcsec([0.0, 0.1, -0.1])]
+    [5.1, 5.2, 5.2]
+    """
+    r = np.asarray(r_arcsec, float)
+    if r.size < 3 or _outliers(r)[0].size:
+        return np.zeros(r.size)
+    spread = float(r.max() - r.min())
+    hi = 2.0 * (spread + max(ROBUST_Z * 1.4826 * spread, ANGLE_FLOOR_ARCSEC))
+    grid = np.linspace(0.0, hi, 801)
+    out = np.zeros(r.size)
+    for i in range(r.size):
+        for sign in (1.0, -1.0):
+            def passes(t: float) -> bool:
+                x = r.copy()
+                x[i] += sign * t
+                return _outliers(x)[0].size == 0
+            ok = [passes(float(t)) for t in grid]
+            k = max(j for j, v in enumerate(ok) if v)
+            if k == grid.size - 1:
+                best = float(grid[-1])
+            else:
+                lo_t, hi_t = float(grid[k]), float(grid[k + 1])
+                for _ in range(40):
+                    mid = 0.5 * (lo_t + hi_t)
+                    lo_t, hi_t = (mid, hi_t) if passes(mid) else (lo_t, mid)
+                best = lo_t
+            out[i] = max(out[i], best)
+    return out
+
+
+def median_rule_limit(g: pd.DataFrame, test: str, what: str, file) -> Finding:
+    """A flagged finding for 7.1 readings judged only by the median rule (fewer than
+    ``LINE_MIN`` readings, e.g. 7.1 at three stops): the size of a typo in one of them the
+    rule could not have seen (:func:`median_rule_blind_arcsec`, the largest over the
+    readings) and what it would do to K and K_l.
+
+    Why. The median rule's floor (``ANGLE_FLOOR_ARCSEC``) sits far above a healthy
+    reading's spread, so a typo below it passes, and in 7.1 a typo in one reading is
+    indistinguishable from a nonlinearity at that stop: it moves K_i = C_i/θ_i by
+    t/θ_i, K (the mean of the m K_i) by t/(θ_i · m) and K_l (their range) by up to
+    t/θ_i, and through K every item computed with it (E at 360° by 360° · ΔK/K: a 3″
+    typo at 120° of three stops moves E by 3″). Where 7.4 reads 7.1's stops at its rate
+    and axis in several series, :func:`reference_agreement` judges them (the condition
+    rule's groups); a median-rule group gets this statement instead (docs/draft-readings.md,
+    "7.1 without a repeated reference")."""
+    r = g["_r"].to_numpy(float)
+    theta = np.abs(g["table_deg"].to_numpy(float))
+    lines = g["line"].astype(int).tolist()
+    t = median_rule_blind_arcsec(r)
+    i = int(np.argmax(t))
+    rel = t / np.where(theta > 0, deg_to_arcsec(theta), np.inf)
+    k_ppm = float(np.max(rel)) / len(r) * 1e6
+    kl_pct = float(np.max(rel)) * 100.0
+    return Finding(
+        "readings-not-judged",
+        f"{what}: readings at lines {', '.join(map(str, lines))} judged only by the median "
+        f"rule (fewer than {LINE_MIN} readings; its floor {ANGLE_FLOOR_ARCSEC:g}″, widened "
+        f"by the readings' own spread): a typo in one of them of up to "
+        f"{math.ceil(float(t[i]) * 100.0) / 100.0:.2f}″ (line {lines[i]}, {theta[i]:g}°) "
+        f"would not have been seen; it would move K by up to {k_ppm:.2g} ppm and K_l by up "
+        f"to {kl_pct:.2g} %, and E and every item computed with K with them", "flagged",
+        file=file, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
+        clause=CLAUSES[test], rule=_MEDIAN_LIMIT_RULE)
+
+
+_MEDIAN_LIMIT_RULE = (
+    f"7.1 of fewer than {LINE_MIN} readings: the median rule (|r − median| > max("
+    f"{ROBUST_Z:g} · 1.4826 · MAD, {ANGLE_FLOOR_ARCSEC:g}″)); stated: the largest typo t in one "
+    "reading with which that rule finds nothing (searched on the readings as read), and "
+    "t / θ / m (K) and t / θ (K_l) at its stop")
 
 
 #: The fewest 7.4 series at 7.1's stops that :func:`reference_agreement` judges 7.1 against
