@@ -745,7 +745,7 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             out += reference_agreement(g, ref74, it, what, file, step, alpha,
                                        {f.line for f in found})
         elif key[0] in ROUND_MAY_GO and not found and len(g) >= 3:
-            out.append(median_rule_limit(g, key[0], what, file))
+            out.append(median_rule_limit(g, key[0], what))
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         what = f"zero_stability series {int(se)}"
         if len(g) < ZS_NEIGHBOUR_MIN:
@@ -797,7 +797,7 @@ def median_rule_blind_arcsec(r_arcsec) -> np.ndarray:
     return out
 
 
-def median_rule_limit(g: pd.DataFrame, test: str, what: str, file) -> Finding:
+def median_rule_limit(g: pd.DataFrame, test: str, what: str) -> Finding:
     """A flagged finding for 7.1 readings judged only by the median rule (fewer than
     ``LINE_MIN`` readings, e.g. 7.1 at three stops): the size of a typo in one of them the
     rule could not have seen (:func:`median_rule_blind_arcsec`, the largest over the
@@ -828,7 +828,9 @@ def median_rule_limit(g: pd.DataFrame, test: str, what: str, file) -> Finding:
         f"{math.ceil(float(t[i]) * 100.0) / 100.0:.2f}″ (line {lines[i]}, {theta[i]:g}°) "
         f"would not have been seen; it would move K by up to {k_ppm:.2g} ppm and K_l by up "
         f"to {kl_pct:.2g} %, and E and every item computed with K with them", "flagged",
-        file=file, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
+        # no path: a statement on every file of such a programme, so outputs stay the same
+        # wherever the readings lie (results.json's inputs name the readings file)
+        file=None, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
         clause=CLAUSES[test], rule=_MEDIAN_LIMIT_RULE)
 
 
