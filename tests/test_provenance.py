@@ -150,8 +150,10 @@ def test_contradicting_lab_file_is_refused(run):
     assert "\n" not in line and "serial" in line and LAB_SERIAL in line, line
     assert not (work / "refused").exists()
     md = json.loads((cal / "results.json").read_text(encoding="utf-8"))["metadata"]
-    t = md.get("temperature_c") or md.get("room_temperature_c")
-    if t is not None:                 # the triad's readings state no room temperature
+    # IEC 62047-20's room_temperature_c is its chamber's T_BASE, not the room's
+    t = md.get("temperature_c") or (md.get("room_temperature_c") if spec != "iec62047-20"
+                                    else None)
+    if t is not None:                 # the triad's and IEC's readings state no room temperature
         hot = lab_file(work, 'on_mismatch = "refuse"', name="hot.toml",
                        temperature_c=float(t) + 5.0)
         hot.write_text(re.sub(r"^\[instrument\]\n.*?\n\n", "", hot.read_text(),
@@ -162,12 +164,13 @@ def test_contradicting_lab_file_is_refused(run):
 
 
 def test_the_measured_room_temperature_speaks_where_the_metadata_are_silent(run):
-    """A rate file without its ``# room_temperature_c`` line still measured the room: the
+    """A JJF 1535 file without its ``# room_temperature_c`` line still measured the room: the
     laboratory file's temperature 5 °C off the median of the room tests' ``temperature_c``
     column is refused naming that column, and one within 1 °C of it calibrates."""
     spec, seed, cal = run
-    if spec not in ("jjf1535-2015", "iec62047-20"):
-        pytest.skip("only the rate files log a temperature column")
+    if spec != "jjf1535-2015":
+        pytest.skip("only JJF 1535's readings log the room (IEC 62047-20's every test runs "
+                    "in the chamber: test_iec_base_temperature_is_not_the_room)")
     work = cal.parent
     proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
     text = (work / "sim" / "readings.csv").read_text(encoding="utf-8")
@@ -183,6 +186,37 @@ def test_the_measured_room_temperature_speaks_where_the_metadata_are_silent(run)
                   work / f"measured-{rc}", cwd=work, rc=rc)
         if rc:
             assert "temperature_c column" in r.stderr and "1 °C apart" in r.stderr, r.stderr
+
+
+def test_iec_base_temperature_is_not_the_room(run):
+    """IEC 62047-20 runs every test in the chamber at a set point: its ``# room_temperature_c``
+    is T_BASE (the midpoint of the operating range) and its ``temperature_c`` column logs the
+    set points, so neither is the room. A laboratory whose room is 5 °C off T_BASE
+    calibrates, with the line and without it, and no temperature contradiction is stated."""
+    spec, seed, cal = run
+    if spec != "iec62047-20":
+        pytest.skip("IEC 62047-20's base temperature")
+    work = cal.parent
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    text = (work / "sim" / "readings.csv").read_text(encoding="utf-8")
+    base = float(re.search(r"^# room_temperature_c: (.*)$", text, re.M).group(1))
+    quiet = work / "iec-no-base-line.csv"
+    quiet.write_text(re.sub(r"^# room_temperature_c:.*\n", "", text, flags=re.M),
+                     encoding="utf-8")
+    lab = lab_file(work, 'on_mismatch = "refuse"', name="room.toml", temperature_c=base - 5.0)
+    lab.write_text(re.sub(r"^\[instrument\]\n.*?\n\n", "", lab.read_text(), flags=re.S | re.M))
+    for i, readings in enumerate((work / "sim" / "readings.csv", quiet)):
+        out = work / f"iec-room-{i}"
+        gonio("calibrate", readings, "--spec", spec, *proto, "--lab", lab, "--out", out,
+              cwd=work)
+        res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+        assert not [f for f in res["findings"] if f["code"] == "identity-mismatch"], res
+    # a room temperature the readings do state (# temperature_c) is still compared
+    hot = work / "iec-stated-room.csv"
+    hot.write_text(f"# temperature_c: {base - 5.0 + 3.0}\n" + text, encoding="utf-8")
+    r = gonio("calibrate", hot, "--spec", spec, *proto, "--lab", lab, "--out",
+              work / "iec-refused", cwd=work, rc=2)
+    assert "temperature" in r.stderr and "more than 1 °C apart" in r.stderr, r.stderr
 
 
 def test_proceeding_states_the_contradiction(run):

@@ -230,7 +230,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     named = instrument_files(spec, readings, opts)     # named in the readings or by an option
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
                               else None, record=record, named=named,
-                              measured=spec.measured_conditions)   # refused here, before the work
+                              measured=spec.measured_conditions,   # refused here, before the work
+                              temperature_keys=spec.room_temperature_keys)
     if "table_calibration" in spec.calibrate_options and (lab_d or {}).get("table_calibration"):
         from gonio.formats.provenance import readings_metadata
         from gonio.pipeline.equipment import lab_table_calibration

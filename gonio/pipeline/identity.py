@@ -58,7 +58,8 @@ def _first(md: dict, keys) -> tuple[str | None, str | None]:
     return None, None
 
 
-def contradictions(metadata: dict, lab: dict | None, measured: dict | None = None) -> list[dict]:
+def contradictions(metadata: dict, lab: dict | None, measured: dict | None = None,
+                   temperature_keys: tuple[str, ...] | None = None) -> list[dict]:
     """Each contradiction between the readings' ``metadata`` and ``lab`` (a loaded laboratory
     file): ``{"what", "key" (the metadata key), "readings", "lab", "lab_key", "tolerance"}``.
 
@@ -81,6 +82,14 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
     ['the column']
     >>> contradictions({"temperature_c": "20.0"}, lab, {"temperature_c": ("25.0", "col")})
     []
+
+    ``temperature_keys``: the readings' metadata keys that state the room temperature (a
+    specification's ``room_temperature_keys``; None: those of :data:`NUMBER_FIELDS`). A key
+    not among them is not the room's and is not compared (IEC 62047-20's
+    ``room_temperature_c`` is its chamber's base temperature):
+
+    >>> contradictions({"room_temperature_c": "22.5"}, lab, None, ("temperature_c",))
+    []
     """
     if not lab:
         return []
@@ -93,10 +102,12 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
             out.append({"what": what, "key": k, "readings": f"'{ours}'", "lab": f"'{theirs}'",
                         "lab_key": f"{section}.{key}", "tolerance": None})
     for what, section, key, md_keys, tol_key, unit in NUMBER_FIELDS:
+        if what == "temperature" and temperature_keys is not None:
+            md_keys = tuple(temperature_keys)
         theirs = (lab.get(section) or {}).get(key)
         k, text = _first(metadata, md_keys)
         where = None
-        if text is None and md_keys[0] in (measured or {}):
+        if text is None and md_keys and md_keys[0] in (measured or {}):
             text, where = measured[md_keys[0]]
         ours = parse_number(text) if text is not None else None
         if theirs is None or ours is None or not math.isfinite(ours):
@@ -236,7 +247,8 @@ def unstated_identity(named: dict, known) -> list[dict]:
 
 
 def check_identity(readings, lab: dict | None, *, lab_file=None,
-                   record: dict | None = None, named=(), measured=None) -> list[Finding]:
+                   record: dict | None = None, named=(), measured=None,
+                   temperature_keys: tuple[str, ...] | None = None) -> list[Finding]:
     """Compare the readings' identity and conditions with ``lab`` (module docstring), and,
     with ``record`` (``calibrate --record``: the registered instrument's texts, see
     :func:`record_contradictions`), the readings and the laboratory file with the records;
@@ -246,10 +258,12 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
     the key) unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged
     findings are returned for the result. ``measured(readings)``: what the readings measured
     of their conditions, compared where their metadata are silent (a specification's
-    ``measured_conditions``; :func:`contradictions`)."""
+    ``measured_conditions``; :func:`contradictions`); ``temperature_keys``: the metadata keys
+    that state the room temperature (a specification's ``room_temperature_keys``)."""
     md = readings_metadata(readings) if lab or record or named else {}
     seen = measured(readings) if measured is not None and lab else None
-    found = contradictions(md, lab, seen) + record_contradictions(md, lab, record)
+    found = contradictions(md, lab, seen, temperature_keys) + \
+        record_contradictions(md, lab, record)
     found += named_contradictions(md, {Path(p).name: readings_metadata(p) for p in named},
                                   lab, record, Path(readings).name)
     if not found:

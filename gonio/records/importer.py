@@ -291,7 +291,8 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
     if lab is None and record is None and not named:
         return
     details = load_lab_file(lab, get(spec_key)) if lab is not None else None
-    found = check_identity(rd, details, lab_file=lab, record=record, named=named)
+    found = check_identity(rd, details, lab_file=lab, record=record, named=named,
+                           temperature_keys=get(spec_key).room_temperature_keys)
     stated = {str(f.get("message")) for f in results.get("findings") or []
               if isinstance(f, dict) and f.get("code") == MISMATCH_CODE}
     missing = [f.message for f in found if f.message not in stated]

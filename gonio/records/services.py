@@ -1909,9 +1909,11 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
     metadata, or as entered after comparing it with what the readings state."""
     from gonio.formats.provenance import readings_metadata
     from gonio.records.compute import readings_file
+    from gonio.specs import get
 
     if not from_readings and temp is None:
         return None
+    room_keys = get(cal.spec_key).room_temperature_keys   # IEC's room_temperature_c is T_BASE
     src = blobs.blob_path(store.blob_root, cal.readings_sha256)
     if not src.is_file():
         raise GonioError("the calibration's readings are not in the store", key="readings")
@@ -1921,7 +1923,7 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
     if not from_readings:
         from gonio.pipeline.identity import contradictions
         found = contradictions(md, {"environment": {"temperature_c": temp,
-                                                    "humidity_pct": hum}})
+                                                    "humidity_pct": hum}}, None, room_keys)
         if found:
             c = found[0]
             raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
@@ -1929,8 +1931,8 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
                              key="environment")
         return temp, hum, entered_in
     got = []
-    for keys, what, lo, hi in ((("temperature_c", "room_temperature_c"), "temperature", -50,
-                                100), (("humidity_pct",), "humidity", 0, 100)):
+    for keys, what, lo, hi in ((room_keys, "temperature", -50, 100),
+                               (("humidity_pct",), "humidity", 0, 100)):
         v = next((md[k] for k in keys if str(md.get(k, "")).strip()), None)
         if v is None:
             raise GonioError(f"the readings state no {what} (# {keys[0]}): enter the "

@@ -261,6 +261,13 @@ class Specification:
         :func:`gonio.formats.rate_readings.room_temperature_measured`), compared with the
         laboratory file where the readings' metadata are silent
         (:func:`gonio.pipeline.identity.check_identity`); None: nothing measured.
+    room_temperature_keys : tuple of str
+        The readings' metadata keys that state the room temperature, in order of preference,
+        compared with the laboratory file's ``[environment] temperature_c``
+        (:func:`gonio.pipeline.identity.contradictions`) and recorded as the calibration's
+        conditions by the records. A key a specification uses for another temperature is not
+        among them (IEC 62047-20's ``room_temperature_c`` is its base temperature T_BASE, a
+        chamber set point: not the room's).
     simulate_options, calibrate_options, budget_options, serve_options : frozenset
         The keywords the hooks ``simulate``, ``calibrate``, ``budget`` and ``serve`` (``gonio
         bench serve``) take beyond the common ones (``protocol`` and ``dcc`` among them where they apply); any other is
@@ -363,6 +370,7 @@ class Specification:
     named_inputs: Callable[..., list] | None = None
     read_table_calibration: Callable[..., Any] | None = None
     measured_conditions: Callable[..., dict] | None = None
+    room_temperature_keys: tuple[str, ...] = ("temperature_c", "room_temperature_c")
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()

@@ -17,7 +17,9 @@ def rate_specification(package: str, **fields):
     runner written out (:mod:`.simulate`) or held in memory for the coverage study, its
     ``truth`` module, the rate study bench, the per-item renderer
     (:data:`gonio.specs.ITEM_RENDERER`), its ``certificate`` module (the certificate's
-    content) — plus
+    content), the room temperature the readings measured (JJF 1535's reading,
+    :func:`gonio.formats.rate_readings.room_temperature_measured`, unless ``fields`` name
+    ``measured_conditions``) — plus
     ``fields`` (key, titles, clauses, protocol, calibrate, budget, the coverage stream and
     programme ``stream=``/``reduced=``, and ``study_bench_options=``, keywords of the study
     bench, :func:`.simulate.study_bench`)."""
@@ -37,7 +39,8 @@ def rate_specification(package: str, **fields):
         outputs=ITEM_RENDERER, default_bench="mems-adxrs610",
         certificate_content=f"{package}.certificate",
         readings_columns=lazy("gonio.formats.rate_readings:read_columns"),
-        measured_conditions=lazy("gonio.formats.rate_readings:room_temperature_measured"),
+        measured_conditions=fields.pop("measured_conditions", lazy(
+            "gonio.formats.rate_readings:room_temperature_measured")),
         calibrate_options=frozenset({"protocol", "dcc"}),
         arguments={"validate": "gonio.specs._rate_family:add_validate_options"}, **fields)
 

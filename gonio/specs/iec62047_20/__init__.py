@@ -144,4 +144,7 @@ SPEC = rate_specification(
     default_protocol=KEY, load_protocol=lazy("gonio.specs.iec62047_20.protocol:load_protocol"),
     calibrate=calibrate, screen=lazy("gonio.specs.iec62047_20.screen:screen"),
     budget=None,
+    # every IEC 62047-20 test runs in the chamber at a set point (T_BASE or the programme's):
+    # no row logs the room, and "# room_temperature_c" is T_BASE (docs/formats.md)
+    measured_conditions=None, room_temperature_keys=("temperature_c",),
     stream=1, reduced=STUDY_PROGRAMME, study_bench_options={"cross_axis": True, "power_on_transient": True})
