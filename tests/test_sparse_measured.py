@@ -2,7 +2,8 @@
 as a slow logger writes, the logged rows not at the segments' starts) gives K_t and B_t
 measured, equal to those of the same file logged on every row (the check that does not come
 from the filling itself), with one ``measured-sparse`` finding per test instead of one per
-row (docs/formats.md#rate-gyro-columns)."""
+row and no planned set point named missing (a segment's set point is the value most of its
+logged rows give, not the blank between them) (docs/formats.md#rate-gyro-columns)."""
 
 from __future__ import annotations
 
@@ -74,3 +75,34 @@ def test_one_finding_per_test_not_per_row(runs):
     assert all(f["code"] == "measured-sparse" and f["action"] == "flagged" for f in found)
     assert all("1 row in 10" in f["message"] for f in found)
     assert not [f for f in runs["full"]["findings"] if f["column"] == "temperature_c"]
+
+
+def test_no_planned_set_point_is_missing_from_a_sparse_log(runs):
+    """The blanks between a slow logger's rows are no value: every planned temperature is in
+    the sparse readings, as in the full ones."""
+    for name in ("full", "sparse"):
+        miss = [f for f in runs[name]["findings"] if f["code"] == "programme-point-missing"]
+        assert not miss, (name, miss)
+
+
+def test_a_set_point_really_missing_from_a_sparse_log_is_named(tmp_path):
+    """The same rule still names a planned set point the logged rows do not give: the logged
+    rows of one segment say 65 °C where 70 °C is planned (the blanks around them do not
+    hide it), and a segment with no logged row gives no set point at all."""
+    from gonio.specs._rate_family.screening import missing_points
+
+    nan = float("nan")
+    rows = []
+    for step, logged in ((0, 20.0), (1, 65.0), (2, nan)):
+        for i in range(20):
+            rows.append({"test": "sf_temperature", "run": 0, "step": step,
+                         "temperature_c": logged if i % 10 == 5 else nan})
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    expected = {("sf_temperature", 0): [("temperature_c", 20.0), ("temperature_c", 70.0)]}
+    found = missing_points(df, expected)
+    assert [f.code for f in found] == ["programme-point-missing"], found
+    assert "70" in found[0].message, found[0].message
+    expected = {("sf_temperature", 0): [("temperature_c", 20.0), ("temperature_c", 65.0)]}
+    assert missing_points(df, expected) == []

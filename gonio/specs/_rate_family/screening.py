@@ -539,20 +539,32 @@ def expected_from_plan(segments, skip=("vibration",)) -> dict:
 
 def segment_values(df: pd.DataFrame, cols) -> pd.DataFrame:
     """One row per segment (``test``, ``run``, ``step``) with each of ``cols`` the value most
-    of the segment's rows give (the first of equally common ones): the segment's setting,
-    which a typo in one row does not change.
+    of the segment's LOGGED rows give (the first of equally common ones; blanks are no value,
+    a segment with none is NaN): the segment's setting, which a typo in one row does not
+    change, nor a slow logger's blanks between its rows (a chamber logging every 10th row:
+    its set point, not NaN, is the segment's).
 
     >>> d = pd.DataFrame({"test": ["sf"] * 4, "run": [0] * 4, "step": [0] * 4,
     ...                   "rate_dps": [10.0, 100.0, 100.0, 100.0]})
     >>> segment_values(d, ["rate_dps"])["rate_dps"].tolist()
     [100.0]
+    >>> d = pd.DataFrame({"test": ["t"] * 5, "run": [0] * 5, "step": [0, 0, 0, 1, 1],
+    ...                   "temperature_c": [float("nan"), float("nan"), 70.0] + [float("nan")] * 2})
+    >>> segment_values(d, ["temperature_c"])["temperature_c"].tolist()
+    [70.0, nan]
     """
     keys = ["test", "run", "step"]
     if not cols:
         return df.groupby(keys, sort=False).first().reset_index()[keys]
-    return (df.groupby(keys, sort=False)[list(cols)]
-            .agg(lambda v: v.value_counts(sort=True, dropna=False).index[0])
+    return (df.groupby(keys, sort=False)[list(cols)].agg(_most_common_logged)
             .reset_index())
+
+
+def _most_common_logged(v: pd.Series):
+    """The value most of ``v``'s logged (not blank) cells give, the first of equally common
+    ones; NaN where none is logged."""
+    counts = v.value_counts(sort=True, dropna=True)
+    return counts.index[0] if len(counts) else np.nan
 
 
 def missing_points(df: pd.DataFrame, expected: dict, *, file=None,
