@@ -75,3 +75,24 @@ def test_stated_in_both_languages(basis):
     # a result stored before the details held it states nothing
     res["items"]["bias_drift_after_power_on"]["details"] = {}
     assert item_conditions(res, content, "en") == []
+
+
+@pytest.mark.parametrize("p, basis", [(0.0496, "refuted"), (0.0499999, "refuted"),
+                                      (0.05, "not_refuted"), (0.0504, "not_refuted")])
+def test_the_printed_p_value_holds_its_relation(p, basis):
+    """The p-value is printed so that the relation the sentence states holds at the digits
+    printed: 0.0496 is refuted at 0.05 and must not read "0.05 < 0.05" (en and zh)."""
+    import re
+
+    det = {"power_on_records": 3, "transient_test_level": 0.05, "transient_basis": basis,
+           "transient_one": basis == "not_refuted", "transient_test_p": p}
+    res = {"items": {"bias_drift_after_power_on": {"measured": True, "details": det}}}
+    content = spec_content("iec62047-20")
+    for lang, word in (("en", r"p-value "), ("zh", r"p 值 ")):
+        (_, text), = item_conditions(res, content, lang)
+        m = re.search(word + r"([0-9.e-]+) (<|≥) ([0-9.]+)", text)
+        assert m, text
+        printed, rel, lvl = float(m.group(1)), m.group(2), float(m.group(3))
+        assert rel == ("<" if basis == "refuted" else "≥"), text
+        assert (printed < lvl) == (rel == "<"), text
+        assert abs(printed - p) <= 1e-3 * p + 1e-12 or abs(printed - p) < 0.0006, text

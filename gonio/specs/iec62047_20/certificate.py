@@ -32,6 +32,32 @@ TITLES_ZH = {
     "g_sensitivity": "线性加速度灵敏度", "broadband_noise": "宽带噪声", "resolution": "分辨率",
 }
 
+def _p_value_text(p: float, level: float) -> str:
+    """A test's p-value as a sentence states it beside its level: 2 significant digits, and
+    where those would contradict the decision the sentence states (p < level printed as a
+    number not below it: 0.0496 as "0.05 < 0.05"), as many more (at most 6) as show it,
+    rounded toward the side the decision is on (down below the level, up at or above it) —
+    the rule :func:`gonio.result.statement.p_text` follows for a coverage probability: the
+    printed digits never say what the number does not.
+
+    >>> _p_value_text(0.0496, 0.05), _p_value_text(0.63, 0.05), _p_value_text(0.04999, 0.05)
+    ('0.0496', '0.63', '0.0499')
+    >>> _p_value_text(0.05, 0.05), _p_value_text(0.0012345, 0.05), _p_value_text(0.0499999999, 0.05)
+    ('0.05', '0.0012', '0.0499')
+    """
+    from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
+
+    below = p < level
+    text = f"{p:.2g}"
+    for digits in range(2, 8):
+        if (float(text) < level) == below:
+            return text
+        d = Decimal(repr(p))
+        q = Decimal(1).scaleb(d.adjusted() - digits)
+        text = str(d.quantize(q, rounding=ROUND_FLOOR if below else ROUND_CEILING))
+    return text
+
+
 def _power_on_fit(details: dict, lang: str) -> str | None:
     """5.3.3.5's pooling decision as the certificate, summary.txt and the DCC state it, from
     the item's details (:func:`gonio.specs.iec62047_20.items.power_on_fit_decision`); None
@@ -41,7 +67,7 @@ def _power_on_fit(details: dict, lang: str) -> str | None:
         return None
     n, lvl = details.get("power_on_records"), details.get("transient_test_level")
     p = details.get("transient_test_p")
-    pt = "—" if p is None else f"{p:.2g}"
+    pt = "—" if p is None else _p_value_text(p, lvl)
     en = {"one_record": "one record: its own transient fitted",
           "timing_differs": f"the {n} records differ in length or timing: one transient "
                             "fitted to each power-on",
