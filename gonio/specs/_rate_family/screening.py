@@ -440,6 +440,39 @@ def quantisation_rule(df: pd.DataFrame, file=None, clauses: dict | None = None
     return out
 
 
+#: The finding of a rate file that states no certificate u for its rate table.
+RATE_TABLE_UNSTATED_CODE = "rate-table-u-unstated"
+
+
+def rate_table_unstated(metadata: dict, file, assumed_by: str) -> list[Finding]:
+    """A flagged finding where the readings state no ``rate_table_u_rel`` (the rate table's
+    certificate u): the budgets then take the table to conform to JJF 1535 Table 2's rate
+    accuracy 0.05 % (one rectangular line, :func:`.rate_records.rate_table_line`), an
+    assumption the certificate states, naming whose it is (``assumed_by``: JJF 1535's
+    requirement, or the laboratory's own where the specification states none); ``[]``
+    where the readings state it.
+
+    >>> [f.code for f in rate_table_unstated({"rate_table_u_rel": "2.5e-4"}, None, "x")]
+    []
+    >>> f, = rate_table_unstated({}, "r.csv", "JJF 1535 Table 2's requirement")
+    >>> f.action, "0.05 %" in f.message, "0.000289" in f.message
+    ('flagged', True, True)
+    """
+    from gonio.specs._rate_family.rate_records import TABLE2_RATE_ACCURACY_REL
+
+    if str(metadata.get("rate_table_u_rel", "") or "").strip():
+        return []
+    half = TABLE2_RATE_ACCURACY_REL
+    return [Finding(RATE_TABLE_UNSTATED_CODE,
+                    f"the rate table's uncertainty is not stated (no # rate_table_u_rel): "
+                    f"budgeted as a table within ±{100 * half:g} % of the set rate, "
+                    f"{assumed_by}, as a rectangular bound (u = {half / math.sqrt(3):.3g} "
+                    "relative); a table outside it makes the stated U too small — state "
+                    "rate_table_u_rel from the table's calibration certificate",
+                    "flagged", file=file, column="rate_table_u_rel",
+                    rule="the rate table's u stated from its certificate")]
+
+
 def screen(readings, segments, clauses: dict) -> list[Finding]:
     """Every rule on a RateReadings against the planned ``segments`` (the quantisation rule
     where the bench had noise: a noise-free virtual record has none to compare with)."""

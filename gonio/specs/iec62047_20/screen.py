@@ -26,4 +26,7 @@ def screen(readings, protocol=None, **_options) -> list[Finding]:
     rd = load_readings(readings)
     proto = protocol if isinstance(protocol, IECProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
-    return screening.screen(rd, plan(proto, None), CLAUSES)
+    return screening.screen(rd, plan(proto, None), CLAUSES) + screening.rate_table_unstated(
+        rd.metadata, None if rd.path is None else str(rd.path),
+        "the laboratory's assumption taken from JJF 1535 Table 2 (IEC 62047-20 states no "
+        "requirement on the rate table's accuracy)")
