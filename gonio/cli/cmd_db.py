@@ -23,6 +23,10 @@ def register(sub) -> None:
     add_store_options(q)
     for k in ("lab_name", "lab_address", "lab_accreditation", "lab_contact"):
         q.add_argument("--" + k.replace("_", "-"), dest=k, default=None)
+    q.add_argument("--timezone", default=None,
+                   help="the laboratory's time zone, an IANA name (e.g. Asia/Shanghai): the "
+                        "records' calendar dates and 'today' are its dates (default: the "
+                        "machine's local zone)")
     q.set_defaults(func=run_init)
     q = dsub.add_parser("create-user", help="add a user (password from $GONIO_PASSWORD or asked)")
     add_store_options(q)
@@ -529,7 +533,8 @@ def run_init(args) -> int:
     store = _store(args)
     try:
         values = {k: getattr(args, k) for k in ("lab_name", "lab_address", "lab_accreditation",
-                                                "lab_contact") if getattr(args, k) is not None}
+                                                "lab_contact", "timezone")
+                  if getattr(args, k) is not None}
         if values:
             services.set_settings(store, None, **values)
         print(f"records ready: {store.engine.url.render_as_string(hide_password=True)}")

@@ -684,7 +684,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
             raise GonioError(f"not a date (YYYY-MM-DD): {str(meta['date'])[:40]!r}",
                              file=res_path, key="metadata.date") from None
         try:                         # named before the (costly) recomputation
-            services.plausible_dates(day, None)
+            services.plausible_dates(day, None, services.records_today(store))
         except GonioError as exc:
             raise GonioError(exc.message, file=res_path, key="metadata.date") from None
     key = spec_key or results.get("spec") or meta.get("spec")
@@ -735,13 +735,13 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                               env, lab_stds, tsha, tsize, tname, res_path, inputs, options)
 
 
-def import_day() -> _dt.date:
+def import_day(store) -> _dt.date:
     """The calibration date of an imported run whose readings give no ``date`` (so neither
-    does its results.json, which the recomputation checks): the day of the import, UTC as the
-    records' times — never a file's modification time, which anyone can set (``touch -d``)
+    does its results.json, which the recomputation checks): the day of the import, the
+    laboratory's date (:func:`~gonio.records.models.records_today` of the records ``store``) — never a file's modification time, which anyone can set (``touch -d``)
     and which would choose the standards and the table calibration in force on that day
     (docs/records.md, importing an output folder)."""
-    return services.records_today()
+    return services.records_today(store)
 
 
 def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rsha, rsize,
@@ -768,10 +768,10 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
         dated = "the readings' date" if day else "the import day (the readings give no date)"
         if day:     # checked before the recomputation too; the import day is today
             try:
-                services.plausible_dates(day, None)
+                services.plausible_dates(day, None, services.records_today(s))
             except GonioError as exc:
                 raise GonioError(exc.message, file=res_path, key="metadata.date") from None
-        day = day or import_day()
+        day = day or import_day(s)
         cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
                           readings_name=rd.name,
                           protocol=services.text(proto.name if proto else "", "protocol",

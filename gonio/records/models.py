@@ -17,7 +17,8 @@ triggers (the migrations create them, for SQLite and PostgreSQL alike):
                     no UPDATE, no DELETE.
 
 Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
-``date`` values.
+``date`` values, calendar dates of the laboratory in its time zone (the setting
+``timezone``, :func:`records_today`).
 """
 
 from __future__ import annotations
@@ -34,20 +35,80 @@ def utcnow() -> _dt.datetime:
     return _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None)
 
 
-def records_today() -> _dt.date:
-    """The records' "today": the UTC date, as every time the records hold is UTC
-    (:func:`utcnow`). The one day every rule and page of the records compares a date with —
-    a standard's or table calibration's due date when it is registered or edited
-    (:func:`is_past_due`), the overdue marks of the web lists, the due list and recall, a
-    calibration date not in the future, the register's "today" — so that no page marks
-    overdue what a service accepted as in time, or the reverse, in the hours where the
-    laboratory's local date and the UTC date differ (00:00–08:00 in Beijing)."""
-    return utcnow().date()
+def laboratory_zone(name: str = "") -> _dt.tzinfo | None:
+    """The laboratory's time zone: the IANA name ``name`` (the records' setting
+    ``timezone``, e.g. ``Asia/Shanghai``) read by :mod:`zoneinfo`, or None for "" — the
+    machine's local zone. An unknown name is a GonioError naming the setting.
+
+    >>> laboratory_zone("Asia/Shanghai")
+    zoneinfo.ZoneInfo(key='Asia/Shanghai')
+    >>> laboratory_zone("Mars/Olympus")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key timezone: 'Mars/Olympus' is not a time zone of the IANA database (e.g. Asia/Shanghai, Europe/Berlin, UTC; empty: the machine's local zone)
+    """
+    import zoneinfo
+
+    from gonio.errors import GonioError
+
+    if not name:
+        return None
+    try:
+        return zoneinfo.ZoneInfo(name)
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError, TypeError):
+        raise GonioError(f"{name!r} is not a time zone of the IANA database (e.g. "
+                         "Asia/Shanghai, Europe/Berlin, UTC; empty: the machine's local zone)",
+                         key="timezone") from None
 
 
-def is_past_due(due: _dt.date, today: _dt.date | None = None) -> bool:
-    """Whether equipment due on ``due`` is past its due date on ``today`` (default
-    :func:`records_today`): due strictly before it. A standard due today is in time
+def laboratory_date(at_utc: _dt.datetime, zone: str = "") -> _dt.date:
+    """The laboratory's calendar date at the naive UTC time ``at_utc`` (what the records'
+    times hold), in its time zone ``zone`` (:func:`laboratory_zone`; "" the machine's local
+    zone). The one conversion from the records' UTC times to the laboratory's calendar dates
+    (calibration date, due dates, date of issue): 23:30 UTC on 2026-12-01 is 2026-12-02 in
+    Beijing and still 2026-12-01 in Los Angeles.
+
+    >>> import datetime as dt
+    >>> laboratory_date(dt.datetime(2026, 12, 1, 23, 30), "Asia/Shanghai")
+    datetime.date(2026, 12, 2)
+    >>> laboratory_date(dt.datetime(2026, 12, 2, 3, 30), "America/Los_Angeles")
+    datetime.date(2026, 12, 1)
+    """
+    aware = at_utc.replace(tzinfo=_dt.timezone.utc)
+    tz = laboratory_zone(zone)
+    return (aware.astimezone() if tz is None else aware.astimezone(tz)).date()
+
+
+def records_zone(store) -> str:
+    """The laboratory's time zone as the records ``store`` (a store, or an open SQLAlchemy
+    session of one) hold it: the setting ``timezone`` ("" where never set: the machine's
+    local zone)."""
+    get = getattr(store, "get", None)
+    if get is not None and hasattr(store, "scalars"):          # an open session
+        row = store.get(Setting, "timezone")
+    else:
+        with store.session() as s:
+            row = s.get(Setting, "timezone")
+    return row.value if row is not None else ""
+
+
+def records_today(store) -> _dt.date:
+    """The records' "today": the laboratory's calendar date now (:func:`laboratory_date` of
+    :func:`utcnow` in the time zone of the setting ``timezone``, :func:`records_zone`). The
+    records keep their times in UTC, but the dates they compare are the laboratory's calendar
+    dates, so "today" is the laboratory's date — the one day every rule and page of the
+    records compares a date with: a standard's or table calibration's due date when it is
+    registered or edited (:func:`is_past_due`), the overdue marks of the web lists, the due
+    list and recall, a calibration date not in the future (and the form's default and
+    maximum), the register's "today", the date of issue. At 07:30 in Beijing (23:30 UTC the
+    day before) the laboratory's date is today's, not yesterday's. ``store``: the records
+    (a store or an open session)."""
+    return laboratory_date(utcnow(), records_zone(store))
+
+
+def is_past_due(due: _dt.date, today: _dt.date) -> bool:
+    """Whether equipment due on ``due`` is past its due date on ``today`` (the laboratory's
+    date, :func:`records_today`): due strictly before it. A standard due today is in time
     (ISO/IEC 17025 6.4.7: it may be used on its due date); the one rule of registering,
     editing and the lists' "overdue".
 
@@ -57,7 +118,7 @@ def is_past_due(due: _dt.date, today: _dt.date | None = None) -> bool:
     >>> is_past_due(dt.date(2026, 11, 30), dt.date(2026, 12, 1))
     True
     """
-    return due < (records_today() if today is None else today)
+    return due < today
 
 
 class Base(DeclarativeBase):

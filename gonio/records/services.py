@@ -45,7 +45,7 @@ from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
                                   Instrument, ResultItem, Setting, Standard, TableCalibration,
                                   TableCalibrationWithdrawal, User, is_past_due,
-                                  records_today, utcnow)
+                                  laboratory_zone, records_today, utcnow)
 from gonio.records.results import NOT_STATED, result_rows
 
 #: The certificate numbering scheme: prefix, year, four-digit sequence per year.
@@ -62,7 +62,7 @@ _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
 SETTINGS = {"lab_name": "Calibration laboratory", "lab_address": "(address not set)",
             "lab_accreditation": "", "lab_contact": "", "lab_place": "",
             "decision_rule": "non-binary", "guard_band_factor": "1.0", "min_people": "3",
-            "table_calibration_max_months": "24"}
+            "table_calibration_max_months": "24", "timezone": ""}
 
 #: The longest a rotary table's calibration may be registered for (months from its valid
 #: from to its due date; the setting ``table_calibration_max_months`` is the laboratory's
@@ -340,6 +340,8 @@ def check_setting(key: str, value) -> str:
             re.fullmatch(r"[0-9]{1,3}", value)
             and 1 <= int(value) <= MAX_TABLE_INTERVAL_MONTHS):
         raise GonioError(f"a whole number of months, 1 … {MAX_TABLE_INTERVAL_MONTHS}", key=key)
+    if key == "timezone":
+        laboratory_zone(value)      # an IANA name (zoneinfo), "": the machine's local zone
     if key == "guard_band_factor":
         number_value(value, key, 0, 1e6)
         if not value:
@@ -548,7 +550,7 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   traceability=text(traceability, "traceability"),
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
-    today = records_today()
+    today = records_today(store)
     st.out_of_service = past_due(f"standard {st.identifier}", st.due_on, today,
                                  out_of_service or "",
                                  "register it out of service with the reason: --out-of-service "
@@ -565,7 +567,7 @@ def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire
     transaction. ``unique(obj)``: a statement matching another row that would clash
     (refused with ``message``)."""
     if retire is not None:
-        values["retired_on"] = records_today() if retire else None
+        values["retired_on"] = records_today(store) if retire else None
     with store.writing() as s:
         obj = s.get(model, int(obj_id))
         if obj is None:
@@ -661,7 +663,7 @@ def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy
             same = st is not None and st.due_on == values["due_on"]
         if not same:     # a new due date: out of service with its reason, or in time
             values["out_of_service"] = past_due(
-                f"standard {ident}", values["due_on"], records_today(), out_of_service or "",
+                f"standard {ident}", values["due_on"], records_today(store), out_of_service or "",
                 "state why it is out of service: the edit form's 'Out of service' field")
     return _update(store, actor, Standard, standard_id, "standard", values, retire)
 
@@ -750,20 +752,23 @@ def lab_file(store, sha256: str, name: str, spec_key: str) -> dict:
     return out
 
 
-def submission_fields(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
+def submission_fields(performed_on, received_on, standard_ids, temperature_c, humidity_pct,
+                      today: _dt.date):
     """The submission checks of a calibration's own fields, which every path that creates
-    one passes (:func:`create_calibration`): the dates plausible, at least one standard
-    (ISO/IEC 17025 6.5: the result's traceability), the environment entered (7.8.4.1 a);
-    returns (day, received, standard ids, temperature, humidity).
+    one passes (:func:`create_calibration`): the dates plausible on the laboratory's
+    ``today`` (:func:`~gonio.records.models.records_today`; also the calibration date when
+    none is given), at least one standard (ISO/IEC 17025 6.5: the result's traceability), the
+    environment entered (7.8.4.1 a); returns (day, received, standard ids, temperature,
+    humidity).
 
-    >>> submission_fields("2026-01-05", "", [], 20, 45)
+    >>> submission_fields("2026-01-05", "", [], 20, 45, _dt.date(2026, 1, 5))
     Traceback (most recent call last):
     ...
     gonio.errors.GonioError: key standards: tick the reference standard(s) used: a calibration names at least one registered standard (its traceability)
     """
-    day = date_value(performed_on, "performed_on") or records_today()
+    day = date_value(performed_on, "performed_on") or today
     received = date_value(received_on, "received_on")
-    plausible_dates(day, received)
+    plausible_dates(day, received, today)
     ids = sorted({int(i) for i in standard_ids})
     if not ids:
         raise GonioError("tick the reference standard(s) used: a calibration names at least "
@@ -1113,8 +1118,8 @@ def table_interval_months(s: Session) -> int:
 
 def check_table_dates(start: _dt.date, due: _dt.date, months: int, today: _dt.date) -> None:
     """The register's dates (docs/records.md, the register): valid from (the table's
-    calibration date) not after ``today`` (UTC: a calibration is registered once it has been
-    made), the due date after it and at most ``months`` calendar months after it (the
+    calibration date) not after ``today`` (the laboratory's date, :func:`records_today`: a calibration
+    is registered once it has been made), the due date after it and at most ``months`` calendar months after it (the
     laboratory's maximum interval, :func:`add_months`). One-line GonioError otherwise.
 
     >>> check_table_dates(_dt.date(2025, 1, 1), _dt.date(2027, 1, 1), 24, _dt.date(2026, 1, 1))
@@ -1123,7 +1128,7 @@ def check_table_dates(start: _dt.date, due: _dt.date, months: int, today: _dt.da
     gonio.errors.GonioError: key due_on: due_on 2027-01-02 is more than 24 months after valid_from 2025-01-01 (the laboratory's longest table calibration interval, setting table_calibration_max_months: due on 2027-01-01 at the latest)
     """
     if start > today:
-        raise GonioError(f"valid_from {start} is in the future (today is {today}, UTC): "
+        raise GonioError(f"valid_from {start} is in the future (today is {today}, the laboratory's date): "
                          "register a table calibration once it has been made",
                          key="valid_from")
     if due <= start:
@@ -1252,7 +1257,7 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     shown = file_name(name, "table calibration file name")
     cert = text(certificate, "certificate")
     with store.writing() as s:
-        check_table_dates(start, due, table_interval_months(s), records_today())
+        check_table_dates(start, due, table_interval_months(s), records_today(s))
         st = s.get(Standard, int(standard_id), with_for_update=True)
         if st is None:
             raise GonioError("no such standard (register the rotary table as a standard "
@@ -1612,10 +1617,10 @@ def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
     many calibrations used it, "withdrawal": its :class:`TableCalibrationWithdrawal` or None,
     "affected": the ids of the calibrations made with a withdrawn entry
     (:func:`withdrawal_affected`), "asked": a withdrawal asked for and not yet decided
-    (:func:`pending_withdrawal`) or None}``; today is the UTC date (the records keep UTC)."""
+    (:func:`pending_withdrawal`) or None}``; today is the laboratory's date (:func:`records_today`)."""
     from sqlalchemy.orm import selectinload
 
-    day = day or records_today()
+    day = day or records_today(store)
     with store.session() as s:
         rows = s.scalars(select(TableCalibration).options(
             selectinload(TableCalibration.standard), selectinload(TableCalibration.registered_by))
@@ -1671,7 +1676,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     require(actor, "technician")
     day, received, ids, temp, hum = submission_fields(performed_on, received_on,
                                                       standard_ids, temperature_c,
-                                                      humidity_pct)
+                                                      humidity_pct, records_today(store))
     with store.writing() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
@@ -1961,17 +1966,16 @@ def missing_for_review(s: Session, cal: Calibration) -> list[str]:
     return out
 
 
-def plausible_dates(performed: _dt.date, received: _dt.date | None,
-                    today: _dt.date | None = None) -> None:
-    """Dates a certificate can carry: the calibration not in the future (its certificate is
-    issued on or after it) and the item received on or before it; else a GonioError.
+def plausible_dates(performed: _dt.date, received: _dt.date | None, today: _dt.date) -> None:
+    """Dates a certificate can carry: the calibration not after ``today``, the laboratory's
+    date (:func:`~gonio.records.models.records_today`: its certificate is issued on or after
+    it), and the item received on or before it; else a GonioError.
 
     >>> plausible_dates(_dt.date(9999, 12, 31), None, _dt.date(2026, 1, 1))
     Traceback (most recent call last):
     ...
     gonio.errors.GonioError: key performed_on: 9999-12-31 is in the future (today 2026-01-01)
     """
-    today = today or records_today()
     if performed > today:
         raise GonioError(f"{performed} is in the future (today {today})", key="performed_on")
     if received is not None and received > performed:
@@ -2461,7 +2465,7 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
                            "accreditation": cfg["lab_accreditation"],
                            "contact": cfg["lab_contact"]},
             "certificate": {"number": number,
-                            "date_of_issue": records_today().isoformat() if final else "",
+                            "date_of_issue": records_today(store).isoformat() if final else "",
                             "date_of_receipt": cal.received_on.isoformat()
                             if cal.received_on else "",
                             "date_of_calibration": cal.performed_on.isoformat(),
@@ -2896,7 +2900,7 @@ def due_instruments(store, today: _dt.date | None = None, within_days: int = 30)
     """Instruments in use (not retired) due for recalibration within ``within_days`` or
     overdue: the last issued calibration's date plus the instrument's interval (else the
     specification's default)."""
-    today = today or records_today()
+    today = today or records_today(store)
     with store.session() as s:
         last = dict(s.execute(       # issued: it has a certificate (also while amended)
             select(Calibration.instrument_id, func.max(Calibration.performed_on))

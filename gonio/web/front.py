@@ -74,9 +74,10 @@ def virtual_tag(ctx, readings_sha256: str | None) -> str:
     return labels("en")["virtual"]
 
 
-def past_due(due: _dt.date, today: _dt.date | None = None) -> bool:
+def past_due(due: _dt.date, today: _dt.date) -> bool:
     """The lists' "overdue" mark: :func:`gonio.records.models.is_past_due`, the rule the
-    services register and edit standards by, on the records' today."""
+    services register and edit standards by, on the records' today (the laboratory's date,
+    :func:`gonio.records.models.records_today`)."""
     from gonio.records.models import is_past_due
 
     return is_past_due(due, today)

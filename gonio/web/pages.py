@@ -87,7 +87,8 @@ def dashboard(request: Request, session: Session):
     due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
                   due=due, n_due=n_due, review=review, approve=approve,
-                  active=active, n_active=n_active, failed=failed, today=records_today())
+                  active=active, n_active=n_active, failed=failed,
+                  today=records_today(_store(request)))
 
 
 # --------------------------------------------------------------------------- customers
@@ -294,7 +295,7 @@ def due_page(request: Request, session: Session):
     query = urlencode({k: v for k, v in filters.items() if v})
     return render(request, "due.html", user, csrf, rows=rows, total=total, page=page,
                   size=PAGE, f=filters, windows=DUE_WINDOWS, query=query,
-                  extra="&" + query if query else "", today=records_today())
+                  extra="&" + query if query else "", today=records_today(_store(request)))
 
 
 @router.get("/due/recall")
@@ -302,7 +303,7 @@ def recall_page(request: Request, session: Session):
     """The recall notices, one printed page per customer (the print stylesheet)."""
     user, csrf = session
     filters = _due_filters(request)
-    return render(request, "recall.html", user, csrf, today=records_today(),
+    return render(request, "recall.html", user, csrf, today=records_today(_store(request)),
                   notices=queries.recall(_store(request), filters["customer"],
                                          filters["within_days"]),
                   f=filters, lab=services.settings(_store(request)))
@@ -321,14 +322,14 @@ def standard_page(request: Request, session: Session, std_id: int):
     tables = [r for r in services.table_calibrations(_store(request))
               if r["entry"].standard_id == std_id]
     return render(request, "standard.html", user, csrf, **d, page=page, size=PAGE,
-                  today=records_today(), table_calibrations=tables)
+                  today=records_today(_store(request)), table_calibrations=tables)
 
 
 @router.get("/standards")
 def standards_page(request: Request, session: Session):
     user, csrf = session
     return render(request, "standards.html", user, csrf, standards=queries.standards(
-        _store(request)), today=records_today(),
+        _store(request)), today=records_today(_store(request)),
         error=request.query_params.get("error", "")[:300])
 
 
@@ -342,7 +343,8 @@ async def standards_add(request: Request, session: Session):
             "traceability", "out_of_service")})
     except GonioError as exc:
         return render(request, "standards.html", user, csrf, status_code=400, error=str(exc),
-                      standards=queries.standards(_store(request)), today=records_today())
+                      standards=queries.standards(_store(request)),
+                      today=records_today(_store(request)))
     return _back("/standards")
 
 
@@ -356,7 +358,7 @@ def _register_page(request, user, csrf, status_code=200, error=""):
         day = services.date_value(request.query_params.get("date", "")[:20], "date")
     except GonioError as exc:
         day, error = None, error or str(exc)
-    today = records_today()                 # the records' dates are UTC
+    today = records_today(store)            # the laboratory's date (its time zone)
     day = day or today
     return render(request, "table_calibrations.html", user, csrf, status_code=status_code,
                   error=error, rows=services.table_calibrations(store, day),
@@ -464,7 +466,8 @@ def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
                   register=services.table_calibrations(store),
-                  specs=list(available()), today=records_today(), v=entered, ticked=ticked,
+                  specs=list(available()), today=records_today(store), v=entered,
+                  ticked=ticked,
                   kept=kept or {}, reuse=reuse or bool(entered.get("reuse_reason")),
                   limit=blobs.size_text(services.MAX_UPLOAD))
 
@@ -793,7 +796,7 @@ def export_csv(request: Request, session: Session, name: str):
     got = queries.export_rows(_store(request), name, params)
     if got is None:
         return Response("no such list", status_code=404)
-    stamp = records_today().isoformat()
+    stamp = records_today(_store(request)).isoformat()
     return Response(csv_text(*got), media_type="text/csv; charset=utf-8", headers={
         "Content-Disposition": f'attachment; filename="gonio-{name}-{stamp}.csv"'})
 

@@ -1,6 +1,6 @@
 """The calibration date of an imported run (docs/records.md, importing an output folder): the
 readings' ``date`` (which results.json carries and the recomputation checks), else the day of
-the import (UTC) — never results.json's file time, which ``touch -d`` sets and which would
+the import (the laboratory's date) — never results.json's file time, which ``touch -d`` sets and which would
 choose the standards and the table calibration in force on that day. On SQLite and on the
 throwaway PostgreSQL, through the Python function and ``gonio db import``.
 
@@ -26,7 +26,9 @@ BACKDATED = dt.datetime(2025, 1, 15, tzinfo=dt.timezone.utc).timestamp()
 
 
 def utc_today() -> dt.date:
-    return dt.datetime.now(dt.timezone.utc).date()
+    """The laboratory's date now in the machine's local zone (the records' default zone)."""
+    from gonio.records import models
+    return models.laboratory_date(models.utcnow())
 
 
 def backdated_copy(computed_folder, bench_readings, tmp_path):

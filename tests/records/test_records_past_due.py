@@ -23,15 +23,21 @@ from gonio.records.models import AuditEvent, Standard
 
 from .conftest import PASSWORD, make_people
 
-TODAY = dt.datetime.now(dt.timezone.utc).date()     # the service's today (UTC)
+TODAY: dt.date        # the service's today (the laboratory's date), read as each test starts
+
+
+def lab_today() -> dt.date:
+    """The records' today where the database sets no zone: the machine's local date."""
+    from gonio.records import models
+    return models.laboratory_date(models.utcnow())
 
 
 @pytest.fixture(autouse=True)
 def _today_at_each_test():
-    """TODAY read again as each test starts: a suite started before midnight UTC runs these
-    after it (a module constant was the day before's)."""
+    """TODAY read as each test starts, never at import: a suite started before midnight runs
+    these after it (a module constant was the day before's)."""
     global TODAY
-    TODAY = dt.datetime.now(dt.timezone.utc).date()
+    TODAY = lab_today()
 
 
 def gonio(*args, data, rc=0):
@@ -152,28 +158,38 @@ def standards_of(store) -> dict:
                 for x in s.scalars(select(Standard))}
 
 
-def test_one_today_for_services_and_pages(sqlite_store, monkeypatch):
-    """The records' "today" is one day for the services and the web pages: at 23:30 UTC on
-    2026-11-30 (07:30 on 2026-12-01 in Beijing) a standard due on 2026-11-30 is in time for
-    add_standard, update_standard and the lists' overdue mark alike."""
+@pytest.mark.parametrize("zone, shown", [("Asia/Shanghai", dt.date(2026, 12, 1)),
+                                         ("America/Los_Angeles", dt.date(2026, 11, 30))])
+def test_one_today_for_services_and_pages(sqlite_store, monkeypatch, zone, shown):
+    """The records' "today" is one day for the services and the web pages, the laboratory's
+    date in its zone (the setting ``timezone``), whatever the machine's zone (TZ set to the
+    other one): at 23:30 UTC on 2026-11-30 it is 07:30 on 2026-12-01 in Beijing (a standard
+    due on 2026-11-30 past due for add_standard, update_standard and the lists' overdue mark
+    alike) and 15:30 on 2026-11-30 in Los Angeles (in time)."""
     from gonio.records import models
     from gonio.web import front
     monkeypatch.setattr(models, "utcnow", lambda: dt.datetime(2026, 11, 30, 23, 30))
-    monkeypatch.setenv("TZ", "Asia/Shanghai")
+    other = "America/Los_Angeles" if zone == "Asia/Shanghai" else "Asia/Shanghai"
+    monkeypatch.setenv("TZ", other)
     import time
     if hasattr(time, "tzset"):
         time.tzset()
     try:
         store = sqlite_store
         tech = make_people(store)["tech"]
+        services.set_settings(store, None, timezone=zone)
         due = dt.date(2026, 11, 30)
-        assert models.records_today() == due
-        st = services.add_standard(store, tech, name="level", identifier="LV-9", due_on=due)
-        assert st.out_of_service == ""
-        assert not front.past_due(due, models.records_today())
-        services.update_standard(store, tech, st.id, due_on=due - dt.timedelta(days=1),
-                                 out_of_service="sent away")
-        assert front.past_due(due - dt.timedelta(days=1), models.records_today())
+        today = models.records_today(store)
+        assert today == shown
+        late = today > due                      # Beijing: one day past due
+        if late:
+            with pytest.raises(GonioError, match=r"was due on 2026-11-30, before today "
+                                                 r"\(2026-12-01\)"):
+                services.add_standard(store, tech, name="level", identifier="LV-9", due_on=due)
+        st = services.add_standard(store, tech, name="level", identifier="LV-9", due_on=due,
+                                   out_of_service="sent away" if late else "")
+        assert (st.out_of_service != "") == late
+        assert front.past_due(due, models.records_today(store)) == late
     finally:
         monkeypatch.delenv("TZ")
         if hasattr(time, "tzset"):

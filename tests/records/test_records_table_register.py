@@ -602,13 +602,16 @@ def test_register_reads_the_file_first(store, data, expect):
         assert s.scalar(select(TableCalibration.id)) is None
 
 
-def test_register_today_is_the_utc_date(store, monkeypatch):
-    """The register's state "today" is the UTC date: TC-1 (due 2026-01-01) at 23:30 UTC on
-    its due date is in force, at 00:30 UTC the next day expired, whatever the local zone."""
+def test_register_today_is_the_laboratorys_date(store, monkeypatch):
+    """The register's state "today" is the laboratory's date in its zone (setting
+    ``timezone`` Asia/Shanghai, UTC+8): TC-1 (due 2026-01-01) at 15:30 UTC on its due date
+    (23:30 in Beijing) is in force, at 16:30 UTC (00:30 on 2026-01-02 in Beijing) expired,
+    whatever the machine's zone."""
     people, _, table_id, _ = setup_lab(store)
     register(store, people["tech"], table_id, "TC-1")
-    for at, want in ((dt.datetime(2026, 1, 1, 23, 30), ""),
-                     (dt.datetime(2026, 1, 2, 0, 30), "expired: it was due on 2026-01-01")):
+    services.set_settings(store, None, timezone="Asia/Shanghai")
+    for at, want in ((dt.datetime(2026, 1, 1, 15, 30), ""),
+                     (dt.datetime(2026, 1, 1, 16, 30), "expired: it was due on 2026-01-01")):
         monkeypatch.setattr(services, "utcnow", lambda at=at: at)
         monkeypatch.setattr(models, "utcnow", lambda at=at: at)    # models.records_today
         assert [r["state"] for r in services.table_calibrations(store)] == [want], at

@@ -63,14 +63,15 @@ def recalibrated_standard(store, name: str, first: tuple, second: tuple):
     recalibrated with ``second``. A ``first`` already past its due date is registered out of
     service with its reason (the records refuse it otherwise); a ``second`` already past is
     recorded with a reason too (an edit follows the same rule)."""
-    from gonio.records.models import is_past_due
+    from gonio.records.models import is_past_due, records_today
 
     tech = services.user(store, "tech")
-    past = is_past_due(dt.date.fromisoformat(first[2]))
+    past = is_past_due(dt.date.fromisoformat(first[2]), records_today(store))
     std = services.add_standard(store, tech, name=name, identifier="RT-07",
                                 **dict(zip(("certificate", "calibrated_on", "due_on"), first)),
                                 out_of_service="registered with its history" if past else "")
-    again = is_past_due(dt.date.fromisoformat(second[2]))     # an edit follows the same rule
+    again = is_past_due(dt.date.fromisoformat(second[2]),
+                        records_today(store))                # an edit follows the same rule
     services.update_standard(store, tech, std.id,
                              **dict(zip(("certificate", "calibrated_on", "due_on"), second)),
                              out_of_service="recorded with its history" if again else None)
