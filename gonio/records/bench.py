@@ -87,7 +87,8 @@ def create_bench_calibration(store, actor, *, instrument_id: int, resources: dic
 
     services.require(actor, "technician")
     day, received, ids, temp, hum = check_form(performed_on, received_on, standard_ids,
-                                               temperature_c, humidity_pct)
+                                               temperature_c, humidity_pct,
+                                               services.records_today(store))
     request = check_request(resources, metadata or {})
     data = json.dumps(request, sort_keys=True, indent=1).encode("utf-8") + b"\n"
     sha = blobs.put_bytes(store.blob_root, data)

@@ -170,7 +170,8 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     already used by another calibration are used again (empty: such readings are refused)."""
     services.require(actor, "technician")
     day, received, ids, temp, hum = check_form(performed_on, received_on, standard_ids,
-                                               temperature_c, humidity_pct)
+                                               temperature_c, humidity_pct,
+                                               services.records_today(store))
     with store.session() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
