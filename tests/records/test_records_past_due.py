@@ -198,7 +198,7 @@ def test_one_today_for_services_and_pages(sqlite_store, monkeypatch, zone, shown
 
 def test_no_other_today_in_the_records_and_pages():
     """No module of the records or the web pages takes "today" from the local clock
-    (date.today(), a naive now()): every one is models.records_today()."""
+    (date.today(), a naive now()): every one is models.records_today(store)."""
     import re
     from pathlib import Path
 
