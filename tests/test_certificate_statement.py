@@ -151,7 +151,11 @@ def test_E_interval_form_identical_in_every_output(run):
     assert "±" + mt not in summary.split("Uncertainty of")[0]       # no ± U for E
     dcc = (run["dir"] / "en" / "certificate.dcc.xml").read_text()
     assert f"<si:value>{mt}</si:value>" in dcc and f"<si:value>{signed.lstrip('+')}</si:value>" in dcc
-    assert f"<si:intervalMax>{hi_t}</si:intervalMax>" in dcc
+    if res["extra"]["uncertainty"].get("u_c_certified", True) is False:
+        # U = k·u + b: no standard uncertainty of E, the interval's ends as a list
+        assert f"<si:valueXMLList>{lo_t} {hi_t}</si:valueXMLList>" in dcc
+    else:
+        assert f"<si:intervalMax>{hi_t}</si:intervalMax>" in dcc
 
 
 def test_summary_and_certificate_use_the_same_numbers(run):
@@ -176,7 +180,13 @@ def test_summary_and_certificate_use_the_same_numbers(run):
     # the per-point U stated (with the table's bound, U = k·u + b, where the points carry it)
     Us = res["extra"]["uncertainty"].get("U_bound_arcsec") or U
     assert f"U = {half_up(Us, u_decimals(Us))}″" in summary
-    assert f"u_c = {half_up(uc, u_decimals(uc))}″" in summary
+    if res["extra"]["uncertainty"].get("u_c_certified", True) is False:
+        # U = k·u + b: u of the lines other than the table's is stated, no u_c of E
+        u = res["extra"]["uncertainty"]["u_without_table_arcsec"]
+        assert f"u = {half_up(u, u_decimals(u))}″" in summary
+        assert f"u_c = {half_up(uc, u_decimals(uc))}″" not in summary
+    else:
+        assert f"u_c = {half_up(uc, u_decimals(uc))}″" in summary
     # R shown at E's decimal place everywhere (figure legend included)
     R = half_up(res["items"]["repeatability"]["value"], u_decimals(U))
     assert stated_item(res, "repeatability")["value"].text == R

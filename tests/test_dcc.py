@@ -146,13 +146,24 @@ def test_every_number_equals_results_json(run):
     root = etree.fromstring(run["docs"]["lab"])
     e = root.find(".//dcc:result[@id='result-angle_deviation']", NS)
     assert e.find(".//si:expandedMU", NS) is None
-    mu = e.find(".//si:coverageIntervalMU", NS)
     lo, hi = res["items"]["angle_deviation"]["uncertainty"]["interval"]
-    shown_lo = float(mu.find("si:intervalMin", NS).text)
-    shown_hi = float(mu.find("si:intervalMax", NS).text)
+    if res["extra"]["uncertainty"].get("u_c_certified", True) is False:
+        # each point's U = k·u + b: no standard uncertainty of E, so no coverageIntervalMU
+        # (it requires a valueStandardMU); the ends as a list, p in the quantity's name
+        assert e.find(".//si:coverageIntervalMU", NS) is None
+        assert e.find(".//si:valueStandardMU", NS) is None
+        lst = [q for q in e.iterfind(".//dcc:quantity", NS)
+               if q.get("refType") == "basic_measurementUncertainty"]
+        assert len(lst) == 1
+        shown_lo, shown_hi = map(float, lst[0].find(".//si:valueXMLList", NS).text.split())
+        assert "p = 95 %" in lst[0].find(".//dcc:content", NS).text
+    else:
+        mu = e.find(".//si:coverageIntervalMU", NS)
+        shown_lo = float(mu.find("si:intervalMin", NS).text)
+        shown_hi = float(mu.find("si:intervalMax", NS).text)
+        assert float(mu.find("si:coverageProbability", NS).text) == 0.95
     assert shown_lo <= lo <= shown_lo + 0.01 and hi <= shown_hi <= hi + 0.01
     assert shown_lo <= res["items"]["angle_deviation"]["details"]["max_abs_arcsec"] <= shown_hi
-    assert float(mu.find("si:coverageProbability", NS).text) == 0.95
 
 
 def test_dsi_units_parse(run):

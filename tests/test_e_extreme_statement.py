@@ -116,8 +116,15 @@ def test_every_output_states_the_hand_interval(demo):
     summary = (demo / "summary.txt").read_text(encoding="utf-8")
     assert states_interval(summary, hi_t)
     dcc = (demo / "certificate.dcc.xml").read_text(encoding="utf-8")
-    block = dcc.split('id="result-angle_deviation"')[1].split("</dcc:quantity>")[0]
-    assert f"<si:intervalMax>{hi_t}</si:intervalMax>" in block
+    if res["extra"]["uncertainty"].get("u_c_certified", True) is False:
+        # U = k·u + b: no u of E certified, the ends as a list, no valueStandardMU
+        block = dcc.split('id="result-angle_deviation"')[1].split("</dcc:result>")[0]
+        assert re.search(rf"<si:valueXMLList>[\d.]+ {re.escape(hi_t)}</si:valueXMLList>",
+                         block)
+        assert "valueStandardMU>" not in block
+    else:
+        block = dcc.split('id="result-angle_deviation"')[1].split("</dcc:quantity>")[0]
+        assert f"<si:intervalMax>{hi_t}</si:intervalMax>" in block
     assert "expandedMU" not in block and "coverageFactor" not in block
     html = (demo / "certificate.html").read_text(encoding="utf-8")
     row = html.split("Angle-position deviation E")[1].split("</tr>")[0]

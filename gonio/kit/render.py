@@ -33,7 +33,9 @@ The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data
                                 :func:`measurement_result`, :func:`influence_conditions`, :func:`environment_conditions`,
                                 :func:`element`, :func:`text_element`, :func:`quantity`,
                                 :func:`list_quantity`,
-                                :func:`not_measured_quantity`, :func:`tree_bytes`,
+                                :func:`not_measured_quantity`, :func:`interval_quantity`
+                                (an interval without a standard uncertainty),
+                                :func:`unit_dsi`, :func:`tree_bytes`,
                                 :func:`bilingual`, :func:`label_translator`,
                                 :data:`DCC_CONFORMITY`
 ==============================  ==========================================================
@@ -46,9 +48,9 @@ from __future__ import annotations
 
 from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
                               element, environment_conditions, influence_conditions,
-                              label_translator, list_quantity,
+                              interval_quantity, label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
-                              quantity, text_element, tree_bytes)
+                              quantity, text_element, tree_bytes, unit_dsi)
 from gonio.report.figures import (HTML_FIGSIZE, empty_panel, figure_svg, legend_above,
                                   mpl_style, plain_axes, plain_log_ticks)
 from gonio.report.header import (certificate_id, condition_text, conformity_section,
@@ -72,12 +74,12 @@ __all__ = [
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
     "no_probability_note", "measured_note", "interval_band_note", "declaration_parts",
-    "interval_legend",
+    "interval_legend", "interval_quantity",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
     "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity",
     "reason_text", "render_html", "render_pdf", "render_pdf_figures", "rule_at_U",
-    "signature_blocks", "text_element", "tree_bytes",
+    "signature_blocks", "text_element", "tree_bytes", "unit_dsi",
 ]

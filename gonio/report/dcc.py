@@ -55,7 +55,7 @@ from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, finding_text, labels
 from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
-from gonio.result.statement import DSI_UNITS
+from gonio.result.statement import DSI_UNITS, p_text
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -162,6 +162,20 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
         element(ci, "si:intervalMax", dsi_decimal(interval[1]))
         element(ci, "si:coverageProbability", stated_p(p))
     return r
+
+
+def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str) -> None:
+    """An interval stated without a standard uncertainty (an item whose certificate states
+    no u_c: :func:`gonio.report.item_dcc.u_c_certified` false; the optical E where each
+    point's U = k·u + b carries the table's bound): a dcc:quantity holding its two ends as an si:realListXMLList labelled intervalMin,
+    intervalMax, its p and what it is in the name (si:coverageIntervalMU requires an
+    si:valueStandardMU, which the certificate does not state)."""
+    q = element(d, "dcc:quantity", refType="basic_measurementUncertainty")
+    text_element(q, "dcc:name", f"{name}: {what}; p = {p_text(p)} %")
+    rl = element(q, "si:realListXMLList")
+    element(rl, "si:labelXMLList", "intervalMin intervalMax")
+    element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(e)) for e in ends))
+    element(rl, "si:unitXMLList", f"{dsi} {dsi}")
 
 
 def stated_p(p) -> str:

@@ -18,7 +18,7 @@ the specification lists (``MATRICES`` of its certificate data: name, item keys r
 as an si:realListXMLList with its si:expandedMUXMLList. Conformity statements
 (``items.<key>.conformity``) go into the statements as in the other DCCs. An item stated by
 a bound-condition interval, whose u_c the certificate does not state (:func:`u_c_certified`),
-has its interval's ends written without a standard uncertainty (:func:`_interval_quantity`).
+has its interval's ends written without a standard uncertainty (:func:`interval_quantity`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (administrative_data, stated_p, conformity_statements,
+from gonio.report.dcc import (administrative_data, conformity_statements, interval_quantity,
+                              stated_p,
                               element, environment_conditions, influence_conditions,
                               measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
@@ -77,27 +78,12 @@ def u_c_certified(it: dict) -> bool:
     bounds plus k·u of the other lines), whose certificate row states a, u of the other
     lines, their ν and k — its u_c (the JCGM 100 budget) is kept in results.json, not
     certified. The DCC writes such an item's interval ends without a standard uncertainty
-    (:func:`_interval_quantity`).
+    (:func:`interval_quantity`).
 
     >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
     (False, True)
     """
     return not (it.get("details") or {}).get("bound_condition")
-
-
-def _interval_quantity(d, name: str, ends, dsi: str, p: float, what: str) -> None:
-    """An interval stated without a standard uncertainty (:func:`u_c_certified` false):
-    a dcc:quantity holding its two ends as an si:realListXMLList labelled intervalMin,
-    intervalMax, its p and what it is in the name (si:coverageIntervalMU requires an
-    si:valueStandardMU, which the certificate does not state)."""
-    from gonio.report.dcc import dsi_decimal
-
-    q = element(d, "dcc:quantity", refType="basic_measurementUncertainty")
-    text_element(q, "dcc:name", f"{name}: {what}; p = {p_text(p)} %")
-    rl = element(q, "si:realListXMLList")
-    element(rl, "si:labelXMLList", "intervalMin intervalMax")
-    element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(e)) for e in ends))
-    element(rl, "si:unitXMLList", f"{dsi} {dsi}")
 
 
 #: what a bound-condition interval is, in the DCC's words
@@ -166,7 +152,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
                  ref_type="basic_measuredValue",
                  description=st.text() if st is not None and st.below_zero else None, **kw)
         if bound is not None:
-            _interval_quantity(d, name, bound, dsi, float(p), BOUND_INTERVAL)
+            interval_quantity(d, name, bound, dsi, float(p), BOUND_INTERVAL)
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -368,9 +368,15 @@ def e_point_statement(points) -> dict:
     """``extra.uncertainty``'s per-point statement where the points carry the table's bound
     (:func:`gonio.specs.ogam_draft.calibration.point_u_with_bound`): ``U_bound_arcsec`` the
     largest U_i = k·u_i + b_i (the stated per-point U), its ``k_bound``,
-    ``table_bound_arcsec`` b_i, ``u_without_table_arcsec`` u_i and ``U_position_deg``; {}
-    where no point has a bound (a calibrated table, the draft's one budget). ``U_arcsec`` and
-    ``k`` stay the budget's own (the table line at MPE/√3 per position), beside.
+    ``table_bound_arcsec`` b_i, ``u_without_table_arcsec`` u_i with its
+    ``nu_without_table`` (None: ∞), ``ku_arcsec`` = k·u_i (the stated U less b_i, printed as
+    such), ``U_position_deg``, and ``u_c_certified`` False with ``u_c_beside``, what the
+    budget's ``u_c_arcsec`` is; {} where no point has a bound (a calibrated table, the
+    draft's one budget). ``u_c_arcsec``, ``U_arcsec`` and ``k`` stay the budget's own (the
+    table line at MPE/√3 per position, positions independent), beside, not stated: that
+    model does not hold the corner table (:func:`~gonio.specs.ogam_draft.calibration.
+    point_u_with_bound`), so no standard uncertainty of E is certified where U carries b
+    (JCGM 100 4.3.7: b enters as a bound, not as a standard uncertainty).
 
     >>> e_point_statement([{"position_deg": 30.0, "U_bound_arcsec": 0.3, "k_bound": 1.96,
     ...     "table_bound_arcsec": 0.1, "u_without_table_arcsec": 0.1}])["U_position_deg"]
@@ -385,4 +391,15 @@ def e_point_statement(points) -> dict:
     return {"U_bound_arcsec": w["U_bound_arcsec"], "k_bound": w["k_bound"],
             "table_bound_arcsec": w["table_bound_arcsec"],
             "u_without_table_arcsec": w["u_without_table_arcsec"],
-            "U_position_deg": w["position_deg"]}
+            "nu_without_table": w.get("nu_without_table"),
+            "ku_arcsec": float(w["k_bound"] * w["u_without_table_arcsec"]),
+            "U_position_deg": w["position_deg"],
+            "u_c_certified": False, "u_c_beside": E_U_C_BESIDE}
+
+
+#: What E's budget ``u_c_arcsec`` is where the per-point U carries the table's bound
+#: (:func:`e_point_statement`): kept in results.json, not stated.
+E_U_C_BESIDE = ("the budget's u_c with the table line at MPE/sqrt(3) per position (positions "
+                "independent), which does not hold the corner table; beside, not stated: the "
+                "stated U = k*u + b carries the table by its bound b, and u is that of the "
+                "lines other than the table's (u_without_table_arcsec, nu_without_table)")

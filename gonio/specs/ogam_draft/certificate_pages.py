@@ -28,6 +28,7 @@ rule, half up); in the HTML each carries ``data-src`` (its path in
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
@@ -44,9 +45,10 @@ from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.result.findings import stated_findings
-from gonio.result.statement import signed_text
+from gonio.result.statement import nu_text, signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
                                            conformity_for, detail, e_budget, e_by_interval,
+                                           e_u_c_certified,
                                            e_draft_segments, e_interval_segments, followed,
                                            interval_cell, item_names, item_path, k_table_note,
                                            e_table_note, k_tilt_note,
@@ -107,6 +109,9 @@ def _e_u_line(res: dict, unc: dict, L: dict, U: float, lang: str, by_iv: bool, o
     key = ("U_line_one_budget" if one else "U_line_points_bound" if bound
            else "U_line_points") if by_iv else "U_line_p"
     more = dict(u=_num(res, "extra.uncertainty.u_without_table_arcsec", "U", U),
+                ku=_num(res, "extra.uncertainty.ku_arcsec", "U", U),
+                nu=nu_text(math.inf if unc.get("nu_without_table") is None
+                           else unc["nu_without_table"]),
                 b=_num(res, "extra.uncertainty.table_bound_arcsec", "U", U),
                 pos=f"{unc['U_position_deg']:g}") if bound else {}
     pre = "extra.uncertainty." + ("U_bound_arcsec" if bound else "U_arcsec")
@@ -150,7 +155,11 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         by_iv = e_by_interval(res)
         one = unc.get("budget_kind") == "draft"      # the draft's one budget at every point
         add("p", _e_u_line(res, unc, L, U, lang, by_iv, one), "U")
-        add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
+        if e_u_c_certified(unc):
+            add("p", segments(L["u_c_line"],
+                              u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
+        else:           # U = k·u + b: the table by its bound, no u_c of E stated
+            add("p", [L["u_c_not_certified"]])
         dr = unc.get("draft_reading")
         if by_iv:        # E's one statement, its interval (the draft's reading: beside table)
             add("p", e_interval_segments(res, L, beside=False))

@@ -23,11 +23,14 @@ from typing import Any
 from gonio.atomic import write_bytes
 from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               conformity_texts, declaration_parts, display, element,
-                              environment_conditions, influence_conditions, labels, list_quantity,
+                              environment_conditions, influence_conditions, interval_quantity,
+                              labels, list_quantity,
                               measurement_result, new_document,
-                              not_measured_quantity, num, quantity, text_element, tree_bytes)
+                              not_measured_quantity, num, quantity, text_element, tree_bytes,
+                              unit_dsi)
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (band_note, combined_k_note, conformity_for, e_budget,
+                                           e_u_c_certified,
                                            e_interval_segments, followed,
                                            item_names, item_path, item_uncertainty, k_table_note,
                                            e_table_note, k_tilt_note,
@@ -137,9 +140,17 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 and unc["p"] is not None:          # stated by its coverage interval alone
             kw = {"interval": s["interval"]["interval"]["ends"],
                   "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
+        ends = None             # E's interval where no u of E is certified (U = k·u + b)
+        if name == "angle_deviation" and "interval" in kw \
+                and not e_u_c_certified(e_budget(res)):
+            ends, kw = kw["interval"], {}
         if name == "angle_deviation" and s["signed"] is not None:
             quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"],
-                     description=_e_description(res, L, "interval" in kw), **kw)
+                     description=_e_description(res, L, ends is not None or "interval" in kw),
+                     **kw)
+            if ends is not None:           # its ends, no si:valueStandardMU
+                interval_quantity(data, "E = ± max|E_i| (draft 7.4)", ends,
+                                  unit_dsi(item["unit"]), float(unc["p"]), E_BOUND_INTERVAL)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
@@ -157,6 +168,13 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                      description="; ".join(d for d in desc if d) or None, **kw)
         _detail_lists(data, res, name)
     return root
+
+
+#: What E's interval is where each point's U carries the table's bound (its DCC quantity's
+#: name; :func:`gonio.report.dcc.interval_quantity`)
+E_BOUND_INTERVAL = ("the coverage interval of the largest true |E_i|, each point's reach "
+                    "k·u + b: u of the lines other than the table's, b the table's bound at "
+                    "the point; no standard uncertainty of E is certified")
 
 
 #: The DCC's own words around the certificate's K and E notes, in Chinese (a zh DCC writes
@@ -221,7 +239,8 @@ def _e_description(res: dict, L: dict, by_interval: bool) -> str | None:
     if by_interval:             # two paragraphs of sentences, one after the other
         parts.append(("" if _lang(L) == "zh" else " ").join((
             "".join(str(x) for x in e_interval_segments(res, L)),
-            L["E_dcc_standard_mu_draft" if e_budget(res).get("budget_kind") == "draft"
+            L["E_dcc_no_standard_mu" if not e_u_c_certified(e_budget(res))
+              else "E_dcc_standard_mu_draft" if e_budget(res).get("budget_kind") == "draft"
               else "E_dcc_standard_mu"].format(p=_e_max_position(res)))))
     return _SEP[_lang(L)].join(p for p in parts if p) or None
 

@@ -143,14 +143,22 @@ def consistency(c, col: str) -> dict:
 
 def budget(d: dict) -> dict:
     """|c_i|·u_i of E's budget components with u_c and U (Annex A.5–A.7): ``d`` the budget's
-    ``to_dict()`` (kept even when E was not measured, for reference); U the per-point
-    statement it states (with the table's bound where the points carry it)."""
-    return {"components": [{"symbol": c["symbol"], "type": c["type"],
-                            "contribution_arcsec": c["contribution_arcsec"]}
-                           for c in d["components"]],
-            "u_c_arcsec": d["u_c_arcsec"],
-            "U_arcsec": d["U_bound_arcsec"] if d.get("U_bound_arcsec") is not None
-            else d["U_arcsec"]}
+    ``to_dict()`` (kept even when E was not measured, for reference). Where the points carry
+    the table's bound (``U_bound_arcsec``), the stated U = k·u + b is not the budget's
+    k·u_c: ``bound`` then holds u of the lines other than the table's, k·u, b and U, and
+    ``u_c_stated`` is False (the bars' u_c, the table line at MPE/√3, is beside, not stated);
+    ``U_arcsec`` is the budget's own U only where no point has a bound."""
+    out = {"components": [{"symbol": c["symbol"], "type": c["type"],
+                           "contribution_arcsec": c["contribution_arcsec"]}
+                          for c in d["components"]],
+           "u_c_arcsec": d["u_c_arcsec"], "U_arcsec": d["U_arcsec"], "u_c_stated": True}
+    if d.get("U_bound_arcsec") is not None:
+        out.update(u_c_stated=False, U_arcsec=None,
+                   bound={"u_arcsec": d["u_without_table_arcsec"],
+                          "ku_arcsec": d["ku_arcsec"],
+                          "b_arcsec": d["table_bound_arcsec"],
+                          "U_arcsec": d["U_bound_arcsec"]})
+    return out
 
 
 def figure_series(results, e_budget) -> dict:

@@ -206,9 +206,19 @@ def draw_budget(fig, spec, res, L, truth=None) -> None:
     ax = fig.add_subplot(spec)
     d = _series(res, "budget")
     comps = d["components"]
-    names = [f"u({c['symbol'].replace('phi_e', 'φ_e')})" for c in comps] + ["u_c", "U"]
-    vals = [abs(c["contribution_arcsec"]) for c in comps] + [d["u_c_arcsec"], d["U_arcsec"]]
-    colors = ["C0" if c["type"] == "B" else "C1" for c in comps] + ["C2", "C3"]
+    names = [f"u({c['symbol'].replace('phi_e', 'φ_e')})" for c in comps]
+    vals = [abs(c["contribution_arcsec"]) for c in comps]
+    colors = ["C0" if c["type"] == "B" else "C1" for c in comps]
+    bd = d.get("bound")
+    if bd:      # U = k·u + b: u_c (the table at MPE/√3) beside, not stated; u, k·u, b, U
+        names += [L["fig_u_c_beside"], L["fig_u_other"], "k·u", L["fig_b"], "U = k·u + b"]
+        vals += [d["u_c_arcsec"], bd["u_arcsec"], bd["ku_arcsec"], bd["b_arcsec"],
+                 bd["U_arcsec"]]
+        colors += ["0.7", "C2", "C2", "C4", "C3"]
+    else:
+        names += ["u_c", "U"]
+        vals += [d["u_c_arcsec"], d["U_arcsec"]]
+        colors += ["C2", "C3"]
     y = np.arange(len(vals))[::-1]
     ax.barh(y, vals, color=colors, height=0.6)
     for yi, v, n in zip(y, vals, names):

@@ -448,6 +448,10 @@ LABELS: dict[str, dict[str, str]] = {
     "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间（min）"},
     "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M（″）"},
     "ax_contribution": {"en": "contribution (″)", "zh": "分量（″）"},
+    "fig_u_c_beside": {"en": "u_c (table at MPE/√3; not stated)",
+                       "zh": "u_c（转台按最大允许误差/√3；不声明）"},
+    "fig_u_other": {"en": "u (lines other than the table)", "zh": "u（转台以外各分量）"},
+    "fig_b": {"en": "b (table's bound)", "zh": "b（转台误差界）"},
     "lg_series": {"en": "series", "zh": "组"},
     "lg_mean": {"en": "mean E_i", "zh": "平均 E_i"},
     "lg_elliptic": {"en": "elliptic model, ψ = {psi}°", "zh": "椭圆模型, ψ = {psi}°"},
@@ -468,12 +472,21 @@ LABELS: dict[str, dict[str, str]] = {
                             "包含概率{p}"},
     "U_line_points_bound": {
         "en": "Uncertainty of each point's E_i (the largest of the points', at {pos}°): "
-              "U = {U}″, k = {k}, coverage probability {p} (U = k·u + b: k times u = {u}″ of "
-              "the lines other than the table's, plus the table's bound b = {b}″ at the point, "
-              "which holds every table within the MPE)",
+              "U = {U}″, k = {k}, coverage probability {p} (U = k·u + b: u = {u}″ (ν = {nu}) "
+              "the combined standard uncertainty of the lines other than the table's, "
+              "k·u = {ku}″, plus the table's bound b = {b}″ at the point, which holds every "
+              "table within the MPE)",
         "zh": "各测量点 E_i 的测量不确定度（取各点中最大者，位于 {pos}°）：U = {U}″，k = {k}，"
-              "包含概率{p}（U = k·u + b：u = {u}″ 为转台以外各分量的合成；b = {b}″ 为该点转台"
-              "误差的界，对最大允许误差内的任何转台成立）"},
+              "包含概率{p}（U = k·u + b：u = {u}″（ν = {nu}）为转台以外各分量的合成标准不确定度，"
+              "k·u = {ku}″；b = {b}″ 为该点转台误差的界，对最大允许误差内的任何转台成立）"},
+    "u_c_not_certified": {
+        "en": "No combined standard uncertainty of E is certified: the table enters U by its "
+              "bound b, not by a standard uncertainty; u above is that of the lines other than "
+              "the table's (the budget's u_c with the table line at MPE/√3 per position does "
+              "not hold the corner table and is kept in results.json, not stated)",
+        "zh": "不给出 E 的合成标准不确定度：转台以其误差界 b 计入 U，而非以标准不确定度计入；"
+              "上述 u 为转台以外各分量的合成（按每个位置最大允许误差/√3 计转台分量的预算 u_c 对角点转台"
+              "不成立，仅记于 results.json，不作声明）"},
     "U_line_one_budget": {"en": "Uncertainty of each point's E_i (the draft's one Annex A budget, "
                                 "the same at every point): U = {U}″, k = {k}, coverage "
                                 "probability {p}",
@@ -548,6 +561,15 @@ LABELS: dict[str, dict[str, str]] = {
               "不确定度，即 |E_i| 最大的测量点（{p}°）的 E_i 的合成标准不确定度 u_c。它仅在该点的 "
               "|E_i| 明显大于其余各点时一阶成立；对真值 E_i 任何分布形态均成立的区间才是校准结果，"
               "不以 ± k·u 表述。"},
+    "E_dcc_no_standard_mu": {
+        "en": "No standard uncertainty of E is certified and the DCC states none "
+              "(no si:valueStandardMU): each point's U = k·u + b carries the table by its bound "
+              "b, not by a standard uncertainty; the interval's ends, the largest U's k, u of "
+              "the lines other than the table's and b are in results.json "
+              "(extra.uncertainty).",
+        "zh": "不给出 E 的标准不确定度，数字校准证书亦不给出：各点 U = k·u + b 以误差界 b 计入"
+              "转台，而非以标准不确定度计入；区间端点、最大 U 的 k、转台以外各分量的 u 及 b 见 "
+              "results.json。"},
     "E_dcc_standard_mu_draft": {
         "en": "The interval's si:valueStandardMU is the standard uncertainty of max|E_i| by the "
               "law of propagation at the estimates (JCGM 100 5.1.2): u_c of the draft's one "

@@ -44,7 +44,8 @@ from gonio.kit.render import (Num, condition_text, conformity_texts, coverage_te
                               declaration_parts, display,
                               display_number, interval_band_note, item_nums, labels, num,
                               parse_display, rule_at_U)
-from gonio.result.statement import decimals_for_sig, p_relation, p_text, round_half_up
+from gonio.result.statement import (decimals_for_sig, nu_text, p_relation, p_text,
+                                    round_half_up)
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_PHYSICAL_ZH, BUDGET_SOURCES_ZH,
                                             ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
                                             LABELS, READING_NOTES_ZH, TITLES_EN)
@@ -94,6 +95,13 @@ def e_budget(res: dict) -> dict:
 
 #: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
 ANNEX_A_COVERAGE: float = 0.95
+
+
+def e_u_c_certified(unc: dict) -> bool:
+    """Whether E's budget u_c (results.json ``extra.uncertainty.u_c_arcsec``) is stated:
+    not where the per-point U carries the table's bound (``u_c_certified`` False,
+    :func:`gonio.specs.ogam_draft.budget.e_point_statement`), whose u_c is kept beside."""
+    return unc.get("u_c_certified", True) is not False
 
 
 def item_uncertainty(res: dict, name: str) -> dict | None:
@@ -537,17 +545,23 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
                 if u.get("budget_kind") == "draft" else
                 "each point's E_i (the largest of the points')")
         if u.get("table_bound_arcsec") is not None and e_by_interval(res):   # U = k·u + b
+            nu = nu_text(math.inf if u.get("nu_without_table") is None
+                         else u["nu_without_table"])
             lines += ["", f"Uncertainty of each point's E_i (the largest of the points', at "
                           f"{u['U_position_deg']:g}°) ({kind}): "
-                          f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
                           f"U = {num(res, 'extra.uncertainty.U_bound_arcsec', 'U')}″ "
                           f"(k = {num(res, 'extra.uncertainty.k_bound', 'k')}, coverage "
                           f"probability {coverage_text(ANNEX_A_COVERAGE, lang)}; "
-                          f"U = k·u + b: k times u = "
-                          f"{num(res, 'extra.uncertainty.u_without_table_arcsec', 'U')}″ of "
-                          f"the lines other than the table's, plus the table's bound b = "
+                          f"U = k·u + b: u = "
+                          f"{num(res, 'extra.uncertainty.u_without_table_arcsec', 'U')}″ "
+                          f"(ν = {nu}) the combined standard uncertainty of the lines other "
+                          f"than the table's, k·u = "
+                          f"{num(res, 'extra.uncertainty.ku_arcsec', 'U')}″, plus the "
+                          f"table's bound b = "
                           f"{num(res, 'extra.uncertainty.table_bound_arcsec', 'U')}″ at the "
                           f"point, every table within the MPE)"]
+            if not e_u_c_certified(u):
+                lines.append(L["u_c_not_certified"])
         else:
             lines += ["", f"Uncertainty of {what} ({kind}): "
                           f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
