@@ -702,6 +702,12 @@ DCC_ZH: dict[str, str] = {
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
 DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
+    # the optical E's interval where each point's U = k·u + b (ogam_draft.dcc.E_BOUND_INTERVAL)
+    (r"(.+): the coverage interval of the largest true \|E_i\|, each point's reach "
+     r"k·u \+ b: u of the lines other than the table's, b the table's bound at the point; no "
+     r"standard uncertainty of E is certified; p = (\S+) %",
+     "{1}：最大真值 |E_i| 的包含区间，各点延伸 k·u + b：u 为转台以外各分量的合成，b 为该点"
+     "转台误差的界；不给出 E 的标准不确定度；p = {2} %"),
     # a bound-condition interval's ends (gonio.report.item_dcc.BOUND_INTERVAL)
     (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the table's errors at their "
      r"bounds in their worst combination, a, plus k·u of the other lines; no standard "
