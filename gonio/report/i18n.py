@@ -702,7 +702,7 @@ DCC_ZH: dict[str, str] = {
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
 DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
-    # the optical E's interval where each point's U = k·u + b (ogam_draft.dcc.E_BOUND_INTERVAL)
+    # the optical E's interval where each point's U = k·u + b (its DCC's E_BOUND_INTERVAL)
     (r"(.+): the coverage interval of the largest true \|E_i\|, each point's reach "
      r"k·u \+ b: u of the lines other than the table's, b the table's bound at the point; no "
      r"standard uncertainty of E is certified; p = (\S+) %",
