@@ -132,7 +132,7 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
 
 def bound_condition_row(it: dict, src: str, n: dict) -> list:
     """The budget table's U row of an item stated by its bound condition (results.json
-    ``details.bound_condition``, :func:`gonio.specs._rate_family.rate_records.table_bound_statement`):
+    ``details.bound_condition``, written by the specification's bound-condition statement):
     "U = a + k·u_rest: a = …, k = …, ν_eff = …, p = 95 %" and U, the k and ν those of the
     other lines (the ν the results table prints beside the interval)."""
     d = f"{src}.details.bound_condition"
