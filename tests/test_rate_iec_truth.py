@@ -98,18 +98,47 @@ def test_noise_off_recovery_exact(small):
     assert result.items["inband_noise"].value == tr["inband_noise"]["value"] == 0.0
 
 
-@pytest.mark.parametrize("seed", (11, 12, 13, 14))
+NOISE_SEEDS = (11, 12, 13, 14)
+_NOISY: dict = {}
+
+
+def noisy_run(proto, seed):
+    """:func:`run` on the study bench with noise, once per seed in this process."""
+    if (str(proto), seed) not in _NOISY:
+        _NOISY[str(proto), seed] = run(study_bench(), proto, seed, True)
+    return _NOISY[str(proto), seed]
+
+
+@pytest.mark.parametrize("seed", NOISE_SEEDS)
 def test_noise_on_recovery_within_U(small, seed):
-    """Noise on (study bench: noise, rate ripple, power-cycle scatter): within U."""
-    result, tr = run(study_bench(), small, seed, True)
-    for key in ("sf_stability", "inband_noise"):
-        it = result.items[key]
-        assert it.measured, it.reason
-        assert abs(it.value - tr[key]["value"]) <= it.uncertainty.U, (key, it.value, tr[key])
+    """Noise on (study bench: noise, rate ripple, power-cycle scatter): the scale-factor
+    stability within U; the in-band noise rms (stated by its one-sided χ² interval [0, b])
+    measured, its bound above the value (its coverage over the seeds: the test below)."""
+    result, tr = noisy_run(small, seed)
+    it = result.items["sf_stability"]
+    assert it.measured, it.reason
+    assert abs(it.value - tr["sf_stability"]["value"]) <= it.uncertainty.U, (it.value, tr)
+    it = result.items["inband_noise"]
+    assert it.measured, it.reason
+    assert it.uncertainty.interval[0] == 0.0 < it.value < it.uncertainty.interval[1]
     # the ripple is in the truth: without it the truth would be ≥ 5 % lower
     b = study_bench()
     nr = replace(b, equipment=replace(b.equipment, rate_table=replace(
         b.equipment.rate_table, ripple_rel=0.0)))
     assert truth(nr, load_protocol(str(small)))["sf_stability"]["value"] < \
         0.95 * tr["sf_stability"]["value"]
+
+
+def test_noise_rms_bound_holds_the_truth_over_the_seeds(small):
+    """The in-band noise rms's one-sided 95 % interval [0, b] holds the bench's truth (from its
+    noise model, not the estimator) in at least 3 of the 4 seeds: with 95 % intervals, 2 or
+    more misses of 4 has probability 1.4 % (binomial), so a narrower statement fails here.
+    (Seed 11 misses: truth 0.04332 above b = 0.04328 °/s, 1.8 u above the value.)"""
+    from scipy.stats import binom
+
+    misses = [s for s in NOISE_SEEDS
+              if noisy_run(small, s)[1]["inband_noise"]["value"]
+              > noisy_run(small, s)[0].items["inband_noise"].uncertainty.interval[1]]
+    assert binom.sf(1, len(NOISE_SEEDS), 0.05) < 0.02
+    assert len(misses) <= 1, misses
 

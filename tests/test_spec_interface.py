@@ -88,7 +88,14 @@ def test_screen_of_the_optical_draft(tmp_path):
     new = [f for f in found if f.line == 8]
     assert len(new) == 1 and new[0].action == "set_aside" and new[0].column == "table_deg"
     assert new[0].clause == "7.1" and "150" in new[0].message
-    assert {(f.code, f.line) for f in clean} <= {(f.code, f.line) for f in found}
+    # the file's other findings stay; the clean file's median-rule statement on 7.1's three
+    # readings (readings-not-judged) gives way to the round's absence (incomplete-programme,
+    # K on 2 of 3 rounds): two readings are judged by no rule (an open gap, docs/draft-readings.md)
+    gone = {"readings-not-judged"}
+    assert {(f.code, f.line) for f in clean if f.code not in gone} <= \
+        {(f.code, f.line) for f in found}
+    assert any(f.code == "incomplete-programme" and "(7.1)" in f.message and "round 2" in
+               f.message for f in found)
 
 
 def test_lazy_hooks_import_on_call():
