@@ -87,6 +87,27 @@ def names_a_folder(files: dict[str, bytes], *paths) -> bool:
                for f in folders)
 
 
+def through_memo(memo: dict, stats: dict, key: str, out: Path, compute, paths) -> object:
+    """One memoised call: a hit (``key`` in ``memo``) writes the stored output files into
+    ``out`` and returns what the call returned; a miss runs ``compute()``, and keeps its
+    files and return value unless an output names the folder of one of ``paths``
+    (:func:`names_a_folder`). ``stats`` counts hits and misses."""
+    if key in memo:
+        stats["hits"] += 1
+        files, returned = memo[key]
+        for name, data in files.items():
+            (out / name).parent.mkdir(parents=True, exist_ok=True)
+            (out / name).write_bytes(data)
+        return list(returned) if isinstance(returned, list) else returned
+    stats["misses"] += 1
+    returned = compute()
+    files = {p.relative_to(out).as_posix(): p.read_bytes()
+             for p in sorted(out.rglob("*")) if p.is_file()}
+    if not names_a_folder(files, *paths):
+        memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
+    return returned
+
+
 def memoised(real, memo: dict | None = None, stats: dict | None = None):
     """``real`` (calibrate_folder's signature) behind the memo (this process's one, or
     ``memo``; hits and misses counted in ``stats``)."""
@@ -101,21 +122,9 @@ def memoised(real, memo: dict | None = None, stats: dict | None = None):
         out = Path(out)
         if out.exists() and any(out.iterdir()):
             return real(readings, out, **kw)             # not the case the memo knows
-        key = pipeline_key(readings, **kw)
-        if key in memo:
-            stats["hits"] += 1
-            files, returned = memo[key]
-            for name, data in files.items():
-                (out / name).parent.mkdir(parents=True, exist_ok=True)
-                (out / name).write_bytes(data)
-            return list(returned) if isinstance(returned, list) else returned
-        stats["misses"] += 1
-        returned = real(readings, out, **kw)
-        files = {p.relative_to(out).as_posix(): p.read_bytes()
-                 for p in sorted(out.rglob("*")) if p.is_file()}
-        if not names_a_folder(files, readings, protocol, lab, table_calibration, out):
-            memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
-        return returned
+        return through_memo(memo, stats, pipeline_key(readings, **kw), out,
+                            lambda: real(readings, out, **kw),
+                            (readings, protocol, lab, table_calibration, out))
     calibrate_folder.__wrapped__ = real
     return calibrate_folder
 
@@ -165,20 +174,7 @@ def memoised_render(real, memo: dict | None = None, stats: dict | None = None):
         out = Path(out)
         if (out.exists() and any(out.iterdir())) or not Path(lab).is_file():
             return real(results, out, **kw)              # not the case the memo knows
-        key = render_key(results, **kw)
-        if key in memo:
-            stats["hits"] += 1
-            files, returned = memo[key]
-            for name, data in files.items():
-                (out / name).parent.mkdir(parents=True, exist_ok=True)
-                (out / name).write_bytes(data)
-            return list(returned) if isinstance(returned, list) else returned
-        stats["misses"] += 1
-        returned = real(results, out, **kw)
-        files = {p.relative_to(out).as_posix(): p.read_bytes()
-                 for p in sorted(out.rglob("*")) if p.is_file()}
-        if not names_a_folder(files, lab, out):
-            memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
-        return returned
+        return through_memo(memo, stats, render_key(results, **kw), out,
+                            lambda: real(results, out, **kw), (lab, out))
     render_folder.__wrapped__ = real
     return render_folder
