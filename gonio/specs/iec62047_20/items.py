@@ -1769,19 +1769,43 @@ def _excess_slope(kept, r_hat: float, r_at: float) -> float:
 POWER_ON_MC_SEED = 6204720535           # fixed: the same records give the same value
 
 
+#: :func:`_transient_designs` already computed, by (block times, n, P, nr): the replicates of
+#: one budget (and its shares' reruns) and repeated budgets on the same timing reuse them
+_DESIGNS: dict = {}
+
+
 def _transient_designs(tt: np.ndarray, n: int, P: int, nr: int):
     """Per τ on a log grid from the step to 20 record lengths: (the smoothed values of
-    e^(−t/τ) over the blocks at ``tt``, its mean over the first ``nr`` samples), the design
-    of :func:`_transient_fits` (block and reference means of the model, not its values at
-    the block centres)."""
+    e^(−t/τ) over the blocks at ``tt``, its mean over the first ``nr`` samples, the design
+    matrix [1, smoothed values] and its pseudo-inverse), the design of
+    :func:`_transient_fits` (block and reference means of the model, not its values at the
+    block centres); the pseudo-inverse is computed once here, not per fit. The same
+    timing's design is computed once (read-only arrays, shared)."""
+    tt = np.asarray(tt, float)
+    key = (tt.tobytes(), int(n), int(P), int(nr))
+    if key not in _DESIGNS:
+        if len(_DESIGNS) >= 32:
+            _DESIGNS.clear()
+        _DESIGNS[key] = _transient_designs_new(tt, n, P, nr)
+    return _DESIGNS[key]
+
+
+def _transient_designs_new(tt: np.ndarray, n: int, P: int, nr: int):
+    """:func:`_transient_designs` computed afresh."""
     nb = tt.size
     dt = float(tt[1] - tt[0]) / P if nb > 1 else 1.0
     t_raw = dt * np.arange(max(n, nb * P, nr)) - 0.5 * (P - 1) * dt
     span = max(float(tt[-1] - tt[0]), dt * P)
     out = []
+    ones = np.ones(nb)
     for tau in np.geomspace(dt * P, 20 * span, 60):
         e = np.exp(-t_raw / tau)
-        out.append((e[: nb * P].reshape(nb, P).mean(1), float(e[:nr].mean())))
+        eb = e[: nb * P].reshape(nb, P).mean(1)
+        A = np.column_stack([ones, eb])
+        A_pinv = np.linalg.pinv(A)
+        for arr in (eb, A, A_pinv):
+            arr.setflags(write=False)
+        out.append((eb, float(e[:nr].mean()), A, A_pinv))
     return out
 
 
@@ -1793,9 +1817,8 @@ def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, floa
     c0 = Y.mean(1)
     best = ((Y - c0[:, None]) ** 2).sum(1)
     cb, ab, kb = c0.copy(), np.zeros(nrow), np.full(nrow, -1)
-    for k, (eb, _er) in enumerate(design):
-        A = np.column_stack([np.ones(nb), eb])
-        coef = Y @ np.linalg.pinv(A).T                                     # (nrow, 2)
+    for k, (_eb, _er, A, A_pinv) in enumerate(design):
+        coef = Y @ A_pinv.T                                                # (nrow, 2)
         sse = ((Y - coef @ A.T) ** 2).sum(1)
         better = sse < best
         best = np.where(better, sse, best)
@@ -1806,7 +1829,7 @@ def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, floa
         if k < 0:
             out.append((np.full(nb, c), float(c), 0.0))
         else:
-            eb, er = design[k]
+            eb, er = design[k][:2]
             out.append((c + a * eb, float(c + a * er), float(abs(a) * np.max(np.abs(eb - er)))))
     return out
 
@@ -1845,7 +1868,7 @@ def _wander_draws(rng, x: np.ndarray, drift_u, n_mc: int) -> np.ndarray:
     ul = np.unique(np.round(np.concatenate([lag.ravel(), x]), 9))
     Dm = {float(s): (drift_u(float(s)) ** 2 if s > 0 else 0.0) for s in ul}
     Dx = np.array([Dm[float(s)] for s in np.round(x, 9)])
-    Dl = np.vectorize(lambda s: Dm[float(s)])(np.round(lag, 9))
+    Dl = np.array([Dm[float(s)] for s in ul])[np.searchsorted(ul, np.round(lag, 9))]
     C = 0.5 * (Dx[:, None] + Dx[None, :] - Dl)
     if not np.any(C):
         return np.zeros((n_mc, x.size))
