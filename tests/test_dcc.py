@@ -128,7 +128,8 @@ def test_every_number_equals_results_json(run):
     nums = _numbers(run["docs"]["lab"])
     assert len(nums) > 25
     srcs = {s for s, _, _ in nums}
-    for must in ("items.angle_deviation.details.max_abs_arcsec", "items.angle_deviation.value",
+    for must in ("items.angle_deviation.details.max_abs_arcsec",
+                 "items.angle_deviation.details.signed_extreme_arcsec",
                  "items.scale_factor.value", "items.zero_stability.value",
                  "items.repeatability.value", "items.rate_consistency.value",
                  "items.pointing_consistency.value",

@@ -297,8 +297,10 @@ def test_draft_budget_has_the_annex_four_lines_physical_more(tmp_path):
     fc, pc, _ = write_case(tmp_path / "c", counts=True)   # angles from counts through K
     physc, _ = api(fc, pc)
     e_i = E.mean(axis=0)                                   # 0.2, −0.26, 0.3, 0.26
-    assert physc["items"]["angle_deviation"]["value"] == pytest.approx(e_i[np.argmax(np.abs(e_i))],
-                                                              abs=1e-9)
+    ad = physc["items"]["angle_deviation"]
+    assert ad["details"]["signed_extreme_arcsec"] == pytest.approx(
+        e_i[np.argmax(np.abs(e_i))], abs=1e-9)
+    assert ad["value"] == pytest.approx(np.max(np.abs(e_i)), abs=1e-9)   # max|E_i| certified
     extra = [c for c in physc["extra"]["uncertainty"]["components"] if c["beyond_draft"]]
     # the table's errors at the stops (K_P) are in P, one line with the point's and the zero's
     assert {c["symbol"] for c in extra} == {"K_r", "tilt_E"}

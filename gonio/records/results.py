@@ -214,8 +214,9 @@ _INTERVALS: dict[tuple[str, str], dict] = {}
 def max_abs_keys(store, results_sha256: str) -> frozenset:
     """The keys of the items the stored result states by the interval of an extreme of
     magnitudes max_i |x_i| (``uncertainty.k_source``
-    :data:`gonio.result.statement.K_SOURCE_MAX_ABS`: the optical draft's E, whose value is
-    the signed extreme beside an interval of its magnitude), read once per stored result (a
+    :data:`gonio.result.statement.K_SOURCE_MAX_ABS`: the optical draft's E, whose value a
+    result written before 2026-12-02 holds as the signed extreme beside an interval of its
+    magnitude; later ones hold the magnitude itself), read once per stored result (a
     stored file never changes); none where the result cannot be read, and that is not
     kept: the next call reads again."""
     from gonio.result.statement import K_SOURCE_MAX_ABS

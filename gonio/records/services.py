@@ -2769,7 +2769,8 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
 
 def _max_abs(store, key: str, value, interval, results_sha256: str | None) -> bool:
     """Whether a history row is stated by the interval of an extreme of magnitudes (the
-    optical E: its value the signed extreme, its interval that of max|E_i|), where it
+    optical E: its value the signed extreme in a result written before 2026-12-02, its
+    interval that of max|E_i|), where it
     matters: a value below zero beside an interval starting at or above zero; the stored
     result's ``k_source`` says (:func:`gonio.records.results.max_abs_keys`), never the
     numbers' signs alone (a range's bias-corrected estimate below zero, C_g, is not one)."""

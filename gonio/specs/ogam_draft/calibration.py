@@ -430,13 +430,19 @@ class Analysis:
             value = float(iu.value)               # K corrected by the measured tilt, the table
         if c.name == "angle_deviation" and unc is not None and self.e_measured:
             unc = e_stated_uncertainty(unc, getattr(self.uncertainty, "max_interval", None))
+        details = json_safe(self.item_details(c))
+        if c.name == "angle_deviation" and c.measured and value is not None:
+            # the value certified: E = ± max|E_i| (7.4), the magnitude its U or interval is
+            # of; the signed extreme beside it, under its own name
+            details = e_certified_details(details, float(value))
+            value = details["max_abs_arcsec"]
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
                         unc["components"], unc["u_c"], unc["U"], unc["k"], unc["nu_eff"],
                         unc.get("monte_carlo"), unc.get("coverage_probability"),
                         unc.get("k_source") or "", unc.get("interval"), unc.get("u_c_of")),
-                    json_safe(self.item_details(c)), nonnegative=bool((unc or {}).get("nonnegative")))
+                    details, nonnegative=bool((unc or {}).get("nonnegative")))
 
     def result(self) -> Result:
         """The sealed Result of this calibration: the seven items (each item's own fields
@@ -508,6 +514,23 @@ SPEC_KEY = "ogam-draft"
 #: The fields of an optical item that the one result model's Item holds itself (the rest
 #: go under the item's ``details``).
 ITEM_FIELDS = ("item", "value", "unit", "clause", "measured", "reason")
+
+
+def e_certified_details(details: dict, signed_arcsec: float) -> dict:
+    """E's details with the signed extreme of the E_i under its own name: results.json
+    ``items.angle_deviation.value`` is what every output certifies, max|E_i| (7.4:
+    E = ± max|E_i|, the magnitude E's 95 % interval or U is of; ``details.max_abs_arcsec``),
+    and ``details.signed_extreme_arcsec`` the E_i of largest magnitude with its sign, at
+    ``details.position_deg``.
+
+    >>> d = e_certified_details({"max_abs_arcsec": 0.9, "position_deg": 60.0}, -0.9)
+    >>> d["signed_extreme_arcsec"], d["max_abs_arcsec"]
+    (-0.9, 0.9)
+    """
+    out = dict(details)
+    out["signed_extreme_arcsec"] = float(signed_arcsec)
+    out["max_abs_arcsec"] = float(out.get("max_abs_arcsec", abs(signed_arcsec)))
+    return out
 
 
 def _plain_value(c, value=None):

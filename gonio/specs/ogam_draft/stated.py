@@ -135,6 +135,25 @@ def e_by_interval(res: dict) -> bool:
     return u.get("k_source") == K_SOURCE_MAX_ABS and u.get("interval") is not None
 
 
+def e_signed_path(res: dict) -> str:
+    """The path in results.json of E's signed extreme: ``details.signed_extreme_arcsec``
+    (``value`` is max|E_i|, what is certified); a results.json written before that detail
+    existed kept the signed extreme in ``value``.
+
+    >>> e_signed_path({"items": {"angle_deviation": {"details": {"signed_extreme_arcsec": -1}}}})
+    'items.angle_deviation.details.signed_extreme_arcsec'
+    """
+    if detail(res, "angle_deviation", "signed_extreme_arcsec") is not None:
+        return item_path("angle_deviation", "signed_extreme_arcsec")
+    return item_path("angle_deviation", "value")
+
+
+def e_signed(res: dict) -> float:
+    """E's signed extreme (:func:`e_signed_path`)."""
+    d = detail(res, "angle_deviation", "signed_extreme_arcsec")
+    return float(res["items"]["angle_deviation"]["value"] if d is None else d)
+
+
 def stated_item(res: dict, name: str) -> dict:
     """Item ``name`` as every output states it.
 
@@ -167,15 +186,15 @@ def stated_item(res: dict, name: str) -> dict:
         own = item_nums(item, f"items.{name}", sig=sig)
         rule = own["value"].rule
         out["value"] = num(res, item_path(name, "max_abs_arcsec"), rule)
-        out["signed"] = num(res, item_path(name, "value"),
+        out["signed"] = num(res, e_signed_path(res),
                             "s" + rule if rule.startswith("dec") else rule)
         if detail(res, name, "position_deg") is not None:
             out["position"] = num(res, item_path(name, "position_deg"), "pos")
     elif name == "angle_deviation" and max_abs is not None:
         out["value"] = num(res, item_path(name, "max_abs_arcsec"),
                            rule_at_U(U, sig, max_abs, "pmdec"))
-        out["signed"] = num(res, item_path(name, "value"),
-                            rule_at_U(U, sig, item["value"], "sdec"))
+        out["signed"] = num(res, e_signed_path(res),
+                            rule_at_U(U, sig, e_signed(res), "sdec"))
         if detail(res, name, "position_deg") is not None:
             out["position"] = num(res, item_path(name, "position_deg"), "pos")
     elif U is None and name in ITEMS_AT_U_PLACE and item_uncertainty(res, "angle_deviation"):
