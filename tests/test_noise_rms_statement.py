@@ -98,10 +98,11 @@ def iec_noisy(tmp_path_factory):
     return calibrate(rd, str(proto)), res.truth["items"]
 
 
-@pytest.mark.parametrize("key", ["inband_noise", "broadband_noise"])
+@pytest.mark.parametrize("key", ["inband_noise", "broadband_noise", "arw"])
 def test_iec_noise_rms_stated_by_chi2_interval(iec_noisy, key):
     """The item's one statement is [0, rms·√(ν/χ²_0.05,ν)], ν = ½(rms/u_c)² from its own
-    budget (scipy.stats.chi2); no k; the bench's true rms lies below the upper end."""
+    budget (scipy.stats.chi2); no k; the bench's true rms lies below the upper end. The same
+    for 5.4.5.2's ARW (N = σ(τ)·√τ, a dispersion too; its line's edf in the budget)."""
     result, truth = iec_noisy
     it = result.items[key]
     u = it.uncertainty

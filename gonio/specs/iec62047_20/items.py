@@ -981,8 +981,13 @@ def arw(ctx: Context) -> Item:
     its floor down to the line's shortest τ, where a gyro's bias instability fades, and
     overstates the lift (it was therefore applied only halfway, the midpoint of the
     uncorrected and the corrected reading; the five-term factor and that midpoint stay in
-    the details). Uncertainty: the χ² intervals of the points used, and the correction
-    (half its size, normal)."""
+    the details).
+
+    The ARW is a dispersion (N = σ(τ)·√τ on the line) and is stated as one, by its one-sided
+    χ² 95 % interval alone (:func:`arw_uncertainty`): the line reading's spread from the
+    equivalent degrees of freedom of its Allan variances under the five-term model fitted to
+    the same record (:func:`arw_line_edf`; the noise types the fit assumes, not those
+    identified τ by τ), and the correction (half its size, normal); no k, no "± U"."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
     m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
@@ -992,13 +997,11 @@ def arw(ctx: Context) -> Item:
     shaped = _noise_fit_shaped(ctx)
     value, val, ratio, u_rel, mask = arw_reading(allan, shaped)
     midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
-    u = gum(lambda n, c: n * (1 + c),
-            [from_u("N", value, value * u_rel, dof=DOF_U_WITHIN_10PCT, source="χ² intervals of the fit points"),
-             from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=DOF_U_WITHIN_10PCT,
-                    source="bias correction of the −½ line under the fitted model with "
-                           "band-limited flicker (half the correction)")])
+    edf = arw_line_edf(allan, mask, fit)
+    u = arw_uncertainty(value, ratio, edf)
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
+        "line_edf": edf,
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
         "flicker_band_t_lo_s": shaped.t_lo_s,
         "five_term_line_bias_factor": ratio_five,
@@ -1020,6 +1023,53 @@ def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
         / math.sqrt(S_PER_H)
     ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
     return val / ratio, val, ratio, u_rel, mask
+
+
+def arw_line_edf(allan, mask, fit) -> float:
+    """Equivalent degrees of freedom of the −½ line reading of :func:`arw_reading` (the
+    geometric mean of σ̂(τ_i)·√τ_i over the τ in ``mask``) under the five-term model ``fit``
+    (anything with ``Q, N, B, K, R``) fitted to the same record: the noise types are the
+    model's, not identified from the data τ by τ. With c_ij the covariance of the Allan
+    variance estimates σ̂²(τ_i), σ̂²(τ_j) of one record under the model
+    (:func:`gonio.analysis.noise.covariance.variance_covariance`: overlapping terms,
+    neighbouring τ) and σ_i² the model's variances, the mean of ln σ̂²(τ_i) has variance
+    v = Σ_ij c_ij/(σ_i² σ_j²)/n² (delta method), and a χ² with ν degrees of freedom has
+    Var(ln χ²_ν/ν) ≈ 2/ν, so ν = 2/v; N̂²/N² is then read as χ²_ν/ν (one τ: Greenhall's
+    edf, the covariance's diagonal 2σ⁴/edf). Where the model gives no variance at those τ
+    (nothing fitted): the smallest Greenhall edf of the points (the points read as one)."""
+    ok = np.asarray(mask, bool) & np.isfinite(allan.adev) & (allan.adev > 0)
+    fallback = float(np.min(allan.edf[ok])) if ok.any() else math.nan
+    coef = np.array([0.0 if not math.isfinite(float(x)) else float(x) ** 2
+                     for x in (fit.Q, fit.N, fit.B, fit.K, fit.R)])
+    if not ok.any() or not coef[:4].any():
+        return fallback
+    from gonio.analysis.noise.fit import design_matrix
+
+    tau, m = np.asarray(allan.tau_s[ok], float), np.asarray(allan.m[ok], np.int64)
+    var = design_matrix(tau, allan.kind, allan.tau0_s) @ coef        # E[σ̂²(τ_i)]
+    cov = variance_covariance("hdev" if allan.kind == "hdev" else "adev", m,
+                              np.asarray(allan.n_pairs[ok], np.int64), allan.tau0_s, coef)
+    v = float((cov / np.outer(var, var)).sum()) / ok.sum() ** 2 if (var > 0).all() else math.nan
+    return 2.0 / v if math.isfinite(v) and v > 0 else fallback
+
+
+def arw_uncertainty(value: float, ratio: float, edf: float) -> Uncertainty:
+    """The one statement of 5.4.5.2's ARW (:func:`arw`): a dispersion, stated as the noise rms
+    is (:func:`gonio.result.gum.dispersion_uncertainty`), by its one-sided χ² 95 % interval
+    [0, N·√(ν/χ²_0.05,ν)] with ν = ½(N/u_c)². The budget: the line reading, u = N/√(2·edf)
+    with ν = edf (JCGM 100 E.4.3: the u of a standard deviation of edf degrees of freedom;
+    ``edf`` from :func:`arw_line_edf`), and the bias correction by the model's lift factor
+    ``ratio`` (half the correction, normal). Without the correction ν = edf and the upper
+    end is N·√(edf/χ²_0.05,edf), the χ² interval of the Allan deviations the line reads."""
+    u_n = value / math.sqrt(2.0 * edf) if edf > 0 and math.isfinite(edf) else 0.0
+    u = gum(lambda n, c: n * (1 + c),
+            [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
+                    source="χ² of the −½ line's Allan variances: edf of the line reading "
+                           "under the fitted five-term model"),
+             from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=DOF_U_WITHIN_10PCT,
+                    source="bias correction of the −½ line under the fitted model with "
+                           "band-limited flicker (half the correction)")])
+    return dispersion_uncertainty(value, u)
 
 
 def arw_reading_midpoint(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
