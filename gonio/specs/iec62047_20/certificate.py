@@ -188,7 +188,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"selection excess of the largest \|R\| over the supplies \(midpoint ± c_m·σ/2 removed\)",
      "各供电下 |R| 取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
     (r"least-squares slope \((\w+)\)", "最小二乘斜率（{1}）"),
-    (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
+    (r"χ² of the −½ line's Allan variances: edf of the line reading under the fitted "
+     r"five-term model", "−½ 直线各 Allan 方差的 χ²：拟合的五项模型下直线读数的等效自由度"),
     (r"selection excess of the largest of the noisy differences over the temperatures "
      r"visited twice \(midpoint ± c_m·σ/2 removed\)",
      "两次到达的各温度上含噪差值取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
