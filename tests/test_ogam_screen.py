@@ -209,7 +209,11 @@ def test_a_missing_7_1_round_is_named(bench_file):
     df = rd.data
     keep = df[~((df["test"] == "scale_factor") & (df["round"] == 1))].reset_index(drop=True)
     found = screen(Readings(keep, rd.metadata, rd.path), load_protocol(SMALL))
-    assert [(x.code, x.clause) for x in found] == [("incomplete-programme", "7.1")]
+    # and the two readings left are stated as judged by no rule (the median rule needs 3)
+    assert [(x.code, x.clause) for x in found] == [("readings-not-judged", "7.1"),
+                                                  ("incomplete-programme", "7.1")]
+    lines = keep.loc[keep["test"] == "scale_factor", "line"].astype(int).tolist()
+    assert f"lines {lines[0]}, {lines[1]} judged by no rule (2 readings" in found[0].message
 
 
 def test_rate_not_in_programme_is_set_aside(bench_file, tmp_path):

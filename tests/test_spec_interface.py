@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gonio.errors import GonioError
@@ -89,13 +90,27 @@ def test_screen_of_the_optical_draft(tmp_path):
     assert len(new) == 1 and new[0].action == "set_aside" and new[0].column == "table_deg"
     assert new[0].clause == "7.1" and "150" in new[0].message
     # the file's other findings stay; the clean file's median-rule statement on 7.1's three
-    # readings (readings-not-judged) gives way to the round's absence (incomplete-programme,
-    # K on 2 of 3 rounds): two readings are judged by no rule (an open gap, docs/draft-readings.md)
+    # readings gives way to the round's absence (incomplete-programme, K on 2 of 3 rounds)
+    # and to a statement that the two readings left are judged by no rule (the median rule
+    # cannot judge two), naming both, with a typo's effect per ″ at the smaller stop (60°)
     gone = {"readings-not-judged"}
     assert {(f.code, f.line) for f in clean if f.code not in gone} <= \
         {(f.code, f.line) for f in found}
     assert any(f.code == "incomplete-programme" and "(7.1)" in f.message and "round 2" in
                f.message for f in found)
+    nj = [f for f in found if f.code == "readings-not-judged" and f.clause == "7.1"]
+    assert len(nj) == 1 and nj[0].action == "flagged" and nj[0].line == 7
+    assert "lines 7, 9 judged by no rule (2 readings" in nj[0].message
+    # 1″ at 60° of 2 rounds: K by 1/(60 · 3600)/2 = 2.3 ppm, K_l by 1/(60 · 3600) = 0.00046 %
+    k_ppm = 1.0 / (60.0 * 3600.0) / 2 * 1e6
+    kl_pct = 1.0 / (60.0 * 3600.0) * 100.0
+    assert f"moves K by up to {k_ppm:.2g} ppm and K_l by up to {kl_pct:.2g} %" in nj[0].message
+    # the median rule indeed cannot judge two readings: neither departs beyond its threshold
+    for d in (0.1, 3.0, 1e4):
+        r = np.array([0.0, d])
+        med = np.median(r)
+        thr = max(5.0 * 1.4826 * np.median(np.abs(r - med)), 5.0)
+        assert not (np.abs(r - med) > thr).any()
 
 
 def test_lazy_hooks_import_on_call():

@@ -204,6 +204,13 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "{1}，{2} °/s，{3}轴：第 {4} 行的读数仅相互比较：7.4 未在该角速率和轴向上对这些位置各读 {5} "
      "组及以上，没有重复测量的参考说明各位置的读数；该规则只能识别一个偏离的读数，"
      "两个及以上会相互掩盖，并被当作非线性度（K_l）并计入 E"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): readings? at lines? (.+?) judged by no rule \((\d+) "
+     r"readings?; the median rule needs 3\): a typo of any size in one of them would not have "
+     r"been seen; each ″ of it moves K by up to (\S+) ppm and K_l by up to (\S+) % \(line "
+     r"(\d+), (\S+)°\), and E and every item computed with K with them",
+     "{1}，{2} °/s，{3}轴：第 {4} 行的读数未经任何规则判别（{5} 个读数；中位数规则至少需要 3 个）："
+     "其中一个读数无论多大的录入错误都无法被发现；该错误每 1″ 使 K 最多改变 {6} ppm、K_l 最多"
+     "改变 {7} %（第 {8} 行，{9}°），E 及所有用 K 计算的项目随之改变"),
     (r"(\w+) at (\S+) °/s, axis (\w+): readings at lines (.+?) judged only by the median rule "
      r"\(fewer than (\d+) readings; its floor (\S+)″, widened by the readings' own spread\): a "
      r"typo in one of them of up to (\S+)″ \(line (\d+), (\S+)°\) would not have been seen; it "

@@ -46,7 +46,8 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``;
     a 7.1 so judged gets a flagged ``readings-not-judged`` finding stating the largest typo
     in one reading the rule would not have seen and its effect on K and K_l
-    (:func:`median_rule_limit`).
+    (:func:`median_rule_limit`); a 7.1 of fewer than 3 readings, which no rule judges, one
+    saying so with a typo's effect per ″ (:func:`no_rule_statement`).
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
   warm-up, bias instability), so over the 70 min of 7.3 its readings spread beyond the
@@ -744,8 +745,10 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
                         & (rot["orientation"] == key[2])]
             out += reference_agreement(g, ref74, it, what, file, step, alpha,
                                        {f.line for f in found})
-        elif key[0] in ROUND_MAY_GO and not found and len(g) >= 3:
+        elif key[0] in ROUND_MAY_GO and how == "median" and len(g) >= 3 and not found:
             out.append(median_rule_limit(g, key[0], what))
+        elif key[0] in ROUND_MAY_GO and how == "median" and len(g) < 3:
+            out.append(no_rule_statement(g, key[0], what))
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         what = f"zero_stability series {int(se)}"
         if len(g) < ZS_NEIGHBOUR_MIN:
@@ -839,6 +842,44 @@ _MEDIAN_LIMIT_RULE = (
     f"{ROBUST_Z:g} · 1.4826 · MAD, {ANGLE_FLOOR_ARCSEC:g}″)); stated: the largest typo t in one "
     "reading with which that rule finds nothing (searched on the readings as read), and "
     "t / θ / m (K) and t / θ (K_l) at its stop")
+
+
+def no_rule_statement(g: pd.DataFrame, test: str, what: str) -> Finding:
+    """A flagged ``readings-not-judged`` finding for 7.1 readings no screening rule judges:
+    fewer than 3 (a programme of two stops, or three with one missing or set aside by
+    another rule). It names them and states what a typo t″ in one of them does, per ″ at the
+    smallest stop: K by t/(θ · m) (ppm), K_l by up to t/θ (%).
+
+    Why. The median rule (:func:`_outliers`) cannot judge two readings: each departs from
+    their median by half their difference, which the MAD (the same half) times
+    ``ROBUST_Z`` · 1.4826 always exceeds, so it is not run (:func:`_group_outliers`), and
+    no other rule sees a 7.1 reading; the size of a typo it would miss is unbounded, so
+    the finding states the effect per ″ instead of a size (docs/draft-readings.md, "7.1
+    judged by no rule")."""
+    theta = np.abs(g["table_deg"].to_numpy(float))
+    lines = g["line"].astype(int).tolist()
+    m = len(lines)
+    rel = 1.0 / np.where(theta > 0, deg_to_arcsec(theta), np.nan)
+    i = int(np.nanargmax(rel)) if np.isfinite(rel).any() else 0
+    k_ppm = float(rel[i]) / m * 1e6
+    kl_pct = float(rel[i]) * 100.0
+    word = "reading" if m == 1 else "readings"
+    return Finding(
+        "readings-not-judged",
+        f"{what}: {word} at {'line' if m == 1 else 'lines'} {', '.join(map(str, lines))} "
+        f"judged by no rule ({m} {word}; the median rule needs 3): a typo of any size in "
+        f"one of them would not have been seen; each ″ of it moves K by up to "
+        f"{k_ppm:.2g} ppm and K_l by up to {kl_pct:.2g} % (line {lines[i]}, {theta[i]:g}°), "
+        f"and E and every item computed with K with them", "flagged",
+        # no path: a statement on every file of such a programme (median_rule_limit)
+        file=None, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
+        clause=CLAUSES[test], rule=_NO_RULE)
+
+
+_NO_RULE = (
+    "7.1 of fewer than 3 readings: no rule judges them (the median rule cannot: of two "
+    "readings each departs from their median by their MAD); stated: the readings' lines and "
+    "1 / (θ · m) (K) and 1 / θ (K_l) a ″ of typo at the smallest stop")
 
 
 #: The fewest 7.4 series at 7.1's stops that :func:`reference_agreement` judges 7.1 against
