@@ -53,3 +53,20 @@ def test_half_normal_at_the_dominant_pattern_and_narrower_where_alike():
     za = np.array([max_abs_level_z(alike + rng.normal(0.0, 1.0, 12), np.ones(12), 20.0)
                    for _ in range(100)])
     assert float(np.sqrt(np.mean(za * za))) < 0.85
+
+
+def test_miss_probability_equals_the_formula_with_norm_cdf():
+    """max_abs_miss evaluates Φ by scipy.special.ndtr (for speed inside the root searches):
+    bit for bit the formula written here with scipy.stats.norm.cdf, so every factor and z
+    is the same number."""
+    from scipy.stats import norm
+
+    from uncertainty.extreme import max_abs_miss
+
+    d = np.linspace(0.0, 10.0, 2001)
+    rng = np.random.default_rng(3)
+    for m in (1, 2, 12, 40):
+        for cu, cl in zip(rng.uniform(-6.0, 9.0, 8), rng.uniform(0.0, 5.0, 8)):
+            want = (norm.cdf(-cu) * norm.cdf(d - cu) ** (m - 1)
+                    + (1.0 - norm.cdf(cl) * norm.cdf(cl + d) ** (m - 1)))
+            assert np.array_equal(max_abs_miss(cu, cl, m, d), want)

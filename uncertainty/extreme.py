@@ -61,12 +61,15 @@ def max_abs_miss(c_upper: float, c_lower: float, m: int, delta) -> np.ndarray:
 
     >>> round(float(max_abs_miss(1.959964, 3.074636, 1, [0.0])[0]), 4)
     0.0261
+
+    Φ is ``scipy.special.ndtr`` (what ``scipy.stats.norm.cdf`` evaluates, bit for bit,
+    without its argument checks: this runs inside root searches).
     """
-    from scipy.stats import norm
+    from scipy.special import ndtr
 
     d = np.asarray(delta, dtype=float)
-    up = norm.cdf(-c_upper) * norm.cdf(d - c_upper) ** (m - 1)
-    lo = 1.0 - norm.cdf(c_lower) * norm.cdf(c_lower + d) ** (m - 1)
+    up = ndtr(-c_upper) * ndtr(d - c_upper) ** (m - 1)
+    lo = 1.0 - ndtr(c_lower) * ndtr(c_lower + d) ** (m - 1)
     return up + lo
 
 
