@@ -543,13 +543,15 @@ def measurement_result(root, name: str, *, method: str, norm: str,
     return mr
 
 
-def environment_conditions(md: dict, lab: dict | None, temperature_name: str = "temperature"
-                           ) -> list[tuple]:
+def environment_conditions(md: dict, lab: dict | None, temperature_name: str = "temperature",
+                           spec: str | None = None) -> list[tuple]:
     """The (name, value, unit) influence conditions of the certificate's environment rows
     (:func:`gonio.report.header.opening_blocks`): the laboratory file's temperature and
-    humidity, else the readings' metadata, each with the certificate's digits
-    (:func:`gonio.report.header.condition_text`)."""
-    from gonio.report.header import condition_text
+    humidity, else the readings' metadata (the temperature under the room temperature keys
+    of the specification ``spec``, :func:`gonio.report.header.room_temperature_keys`; None:
+    the default keys), each with the certificate's digits
+    (:func:`gonio.report.header.condition_text`). A condition neither states is left out."""
+    from gonio.report.header import condition_text, room_temperature_keys, room_temperature_text
 
     env = (lab or {}).get("environment") or {}
     # the records' environment taken from the readings' metadata is stated as such
@@ -557,7 +559,7 @@ def environment_conditions(md: dict, lab: dict | None, temperature_name: str = "
     out: list[tuple] = []
     t, tag_t = env.get("temperature_c"), tag
     if t is None:
-        t, tag_t = md.get("temperature_c") or md.get("room_temperature_c"), ""
+        t, tag_t = room_temperature_text(md, room_temperature_keys(spec)), ""
     if t not in (None, ""):
         out.append((temperature_name + tag_t, condition_text(t), "degC"))
     h, tag_h = env.get("humidity_pct"), tag

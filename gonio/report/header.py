@@ -37,7 +37,7 @@ from gonio.result.findings import identity_subjects
 
 __all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformity_section",
            "signature_blocks", "meta_text", "record_of", "is_draft", "record_notices",
-           "record_rows"]
+           "record_rows", "room_temperature_keys", "room_temperature_text"]
 
 
 def certificate_id(result, lab: dict | None = None) -> str:
@@ -176,8 +176,44 @@ def condition_text(v) -> str:
     return f"{float(v):g}"
 
 
-def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
-    """Temperature and humidity: the lab file's, else the readings file's. With a lab file,
+def room_temperature_keys(spec_key: str | None) -> tuple[str, ...]:
+    """The readings' metadata keys that state the room temperature for the result of the
+    specification ``spec_key``, in order of preference: its registered
+    ``room_temperature_keys`` (:class:`gonio.specs.Specification`), looked up in the
+    registry when the stored result is rendered, so that a result stored before is rendered
+    by the same rule; a key no installed specification has: the class's default. A key a
+    specification uses for another temperature (a chamber's base temperature) is not among
+    them, and its value is never stated as the room's.
+
+    >>> room_temperature_keys(None)
+    ('temperature_c', 'room_temperature_c')
+    """
+    from gonio.errors import GonioError
+    from gonio.specs import Specification, get
+
+    try:
+        return tuple(get(spec_key).room_temperature_keys) if spec_key else \
+            Specification.room_temperature_keys
+    except GonioError:                  # not installed here: the default rule
+        return Specification.room_temperature_keys
+
+
+def room_temperature_text(md: dict, keys) -> str | None:
+    """The first of ``keys`` (:func:`room_temperature_keys`) the readings' metadata ``md``
+    state (a non-empty value), else None.
+
+    >>> room_temperature_text({"room_temperature_c": "22.5"}, ("temperature_c",)) is None
+    True
+    >>> room_temperature_text({"temperature_c": "", "room_temperature_c": "20.0"},
+    ...                       ("temperature_c", "room_temperature_c"))
+    '20.0'
+    """
+    return next((md[k] for k in keys if md.get(k) not in (None, "")), None)
+
+
+def _environment_rows(md: dict, lab: dict | None, L: dict, spec_key: str | None) -> list:
+    """Temperature and humidity: the lab file's, else the readings file's (the temperature
+    under the specification's :func:`room_temperature_keys` only). With a lab file,
     a value taken from the readings (none in ``[environment]``, or its ``source =
     "readings"``) is stated as such."""
     ns = L["not_stated"]
@@ -185,7 +221,7 @@ def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
     tagged = L["paren"].format(x=L["from_readings"]) if lab is not None else ""
     said = tagged if env.get("source") == "readings" else ""
     t, h = env.get("temperature_c"), env.get("humidity_pct")
-    t_md = md.get("temperature_c") or md.get("room_temperature_c")
+    t_md = room_temperature_text(md, room_temperature_keys(spec_key))
     t_txt = f"{condition_text(t)} °C{said}" if t is not None else (
         f"{condition_text(t_md)} °C{tagged}" if t_md else ns)
     h_txt = f"{condition_text(h)} %{said}" if h is not None else (
@@ -226,7 +262,8 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
     add("h", L["environment"])
-    add("kv", flagged(_environment_rows(md, lab, L), res, L) + list(environment))
+    add("kv", flagged(_environment_rows(md, lab, L, res.get("spec")), res, L)
+        + list(environment))
     return out
 
 

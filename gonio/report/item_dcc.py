@@ -126,7 +126,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             {"name": str(md.get("bench") or md.get("table") or "rate table"),
              "identifier": "", "accuracy": "", "certificate": "",
              "traceability": "none (virtual bench)" if lab is None else "not stated"}])
-    influence_conditions(mr, environment_conditions(md, lab))
+    influence_conditions(mr, environment_conditions(md, lab, spec=spec.key))
     results = element(mr, "dcc:results")
     for key, it in items.items():
         r = element(results, "dcc:result", id=f"result-{key}")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from gonio.report.header import room_temperature_keys
 from gonio.report.rate_certificate import write_rate_certificate
 from gonio.report.rate_content import item_conditions, spec_content
 from gonio.specs import get
@@ -34,7 +35,7 @@ def summary(result, lab: dict | None = None) -> str:
     (:meth:`~gonio.result.model.Result.summary`), then the sentences that define an item's
     measurand as the certificate states them (:func:`gonio.report.rate_content.item_conditions`,
     e.g. JJF 7.2.9's window W, block P and nominal stability)."""
-    text = result.summary(lab)
+    text = result.summary(lab, room_temperature_keys(result.spec_key))
     if result.spec_key and get(result.spec_key).certificate_content:
         conditions = item_conditions(result.to_json(), spec_content(result.spec_key))
         text += "".join(f"note: {t}\n" for _, t in conditions)

@@ -124,7 +124,7 @@ def _plain(v: float) -> str:
 
 def _conditions(res: dict, lab: dict | None) -> list[tuple]:
     md = res.get("metadata", {})
-    out: list[tuple] = environment_conditions(md, lab, "room temperature")
+    out: list[tuple] = environment_conditions(md, lab, "room temperature", res.get("spec"))
     if md.get("supply_nominal_v") not in (None, ""):
         out.append(("nominal supply voltage", _plain(md["supply_nominal_v"]), "",
                     r"\volt"))

@@ -119,10 +119,13 @@ IDENTITY_SOURCES = {"serial": ("instrument", "serial", ("serial",), ""),
                     "humidity": ("environment", "humidity_pct", ("humidity_pct",), " %")}
 
 
-def identity_lines(findings, metadata: dict, lab: dict | None) -> list[str]:
+def identity_lines(findings, metadata: dict, lab: dict | None,
+                   temperature_keys: tuple[str, ...] | None = None) -> list[str]:
     """summary.txt's lines for each identity or condition the readings contradict where the
     laboratory chose to proceed: the text the certificate states (the laboratory file's,
     else the readings'), flagged and pointing to the finding below; ``[]`` where none is.
+    ``temperature_keys``: the readings' metadata keys that state the room temperature (the
+    specification's ``room_temperature_keys``; None: those of :data:`IDENTITY_SOURCES`).
 
     >>> identity_lines([{"code": "identity-mismatch", "action": "flagged", "subject": "serial",
     ...                  "message": "serial: the readings say 'A'"}], {"serial": "A"},
@@ -132,6 +135,8 @@ def identity_lines(findings, metadata: dict, lab: dict | None) -> list[str]:
     out = []
     for subject in identity_subjects(findings):
         section, key, md_keys, unit = IDENTITY_SOURCES.get(subject, ("", "", (), ""))
+        if subject == "temperature" and temperature_keys is not None:
+            md_keys = tuple(temperature_keys)
         v = ((lab or {}).get(section) or {}).get(key)
         if v in (None, ""):
             v = next((metadata.get(k) for k in md_keys if metadata.get(k) not in (None, "")),
@@ -144,12 +149,14 @@ def identity_lines(findings, metadata: dict, lab: dict | None) -> list[str]:
     return out
 
 
-def summary_lines(result, lab: dict | None = None) -> list[str]:
+def summary_lines(result, lab: dict | None = None,
+                  temperature_keys: tuple[str, ...] | None = None) -> list[str]:
     """The lines of :meth:`~gonio.result.model.Result.summary` (``lab``: the laboratory file
-    the certificate is issued with, whose identity texts a contradiction flags)."""
+    the certificate is issued with, whose identity texts a contradiction flags;
+    ``temperature_keys``: :func:`identity_lines`')."""
     lines = virtual_line({"provenance": result.provenance, "metadata": result.metadata})
     lines.append(result.spec_title or result.spec_key)
-    lines += identity_lines(result.findings, result.metadata, lab)
+    lines += identity_lines(result.findings, result.metadata, lab, temperature_keys)
     for it in result.items.values():
         head = f"  {it.clause:10s} {it.title}"
         if not it.measured or it.value is None:

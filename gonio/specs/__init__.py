@@ -264,8 +264,10 @@ class Specification:
     room_temperature_keys : tuple of str
         The readings' metadata keys that state the room temperature, in order of preference,
         compared with the laboratory file's ``[environment] temperature_c``
-        (:func:`gonio.pipeline.identity.contradictions`) and recorded as the calibration's
-        conditions by the records. A key a specification uses for another temperature is not
+        (:func:`gonio.pipeline.identity.contradictions`), recorded as the calibration's
+        conditions by the records and stated as the environment's temperature by the
+        certificate, the DCC and summary.txt where the laboratory file states none
+        (:func:`gonio.report.header.room_temperature_keys`). A key a specification uses for another temperature is not
         among them (IEC 62047-20's ``room_temperature_c`` is its base temperature T_BASE, a
         chamber set point: not the room's).
     simulate_options, calibrate_options, budget_options, serve_options : frozenset

@@ -119,7 +119,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         root, "Calibration of an optical-gyroscope angle measuring instrument",
         method=method_text(res, lab, "en"),
         norm=norm, standards=stds)
-    conds = environment_conditions(md, lab)
+    conds = environment_conditions(md, lab, spec=res.get("spec"))
     influence_conditions(mr, conds)
 
     results = element(mr, "dcc:results")

@@ -19,6 +19,7 @@ from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
+from gonio.report.header import room_temperature_keys
 from gonio.report.i18n import finding_text, labels
 from gonio.result.findings import stated_findings
 from gonio.result.model import Result
@@ -69,7 +70,8 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     statement in the table); from the result or its results.json."""
     result = result if isinstance(result, Result) else Result.from_json(result)
     d = result.to_json()
-    lines = virtual_line(d) + identity_lines(d.get("findings"), d.get("metadata") or {}, lab) \
+    lines = virtual_line(d) + identity_lines(d.get("findings"), d.get("metadata") or {}, lab,
+                                           room_temperature_keys(d.get("spec"))) \
         + [summary_text(d, "en", lab).rstrip("\n")]
     kl = (d["items"].get("scale_factor_nonlinearity") or {}).get("details") or {}
     if kl.get("estimates"):

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from gonio.atomic import output_set
 from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
+from gonio.report.header import room_temperature_keys
 from gonio.result.tables import write_results
 from gonio.report.item_outputs import item_titles, results_json, summary  # noqa: F401
 
@@ -30,7 +31,8 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     result = dataclasses.replace(result, tables=prediction_tables(
         result.extra.get("thermal_model")))
     out = Path(out)
-    paths = write_results(result, out, lab)
+    paths = write_results(result, out, lab, result.summary(lab, room_temperature_keys(
+        result.spec_key)))
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,
                                          dcc=dcc))
     return paths
