@@ -868,7 +868,9 @@ def angle_random_walk(ctx: Context) -> Item:
 
     Uncertainty: the fit's standard uncertainty of N (the least-squares covariance with the
     full covariance of the Allan estimates across τ under the fitted model, which share
-    their data) and the scale factor."""
+    their data) and the scale factor. N is a dispersion (σ(τ)·√τ of white rate noise) and is
+    stated as one, as K_r, B_r and B_s are: by its one-sided χ² 95 % interval alone with
+    ν = ½(N/u_c)² (:func:`gonio.result.gum.dispersion_uncertainty`): no k, no "± U"."""
     title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:
@@ -899,6 +901,7 @@ def angle_random_walk(ctx: Context) -> Item:
                                               source="five-term AVAR fit with band-limited "
                                                      "flicker, u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+    u = dispersion_uncertainty(arw, u)   # a dispersion: its one-sided χ² interval alone
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
         "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
         "formula_25_arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
