@@ -571,11 +571,14 @@ def expected_from_plan(segments, skip=("vibration",)) -> dict:
 
 
 def segment_values(df: pd.DataFrame, cols) -> pd.DataFrame:
-    """One row per segment (``test``, ``run``, ``step``) with each of ``cols`` the value most
-    of the segment's LOGGED rows give (the first of equally common ones; blanks are no value,
-    a segment with none is NaN): the segment's setting, which a typo in one row does not
-    change, nor a slow logger's blanks between its rows (a chamber logging every 10th row:
-    its set point, not NaN, is the segment's).
+    """One row per segment (``test``, ``run``, ``step``) with each of ``cols`` the segment's
+    setting from its LOGGED rows (blanks are no value, a segment with none is NaN): for a set
+    column (``rate_dps``, the axes) the value most of them give (the first of equally common
+    ones), which a typo in one row does not change; for a measured column (MEASURED:
+    ``temperature_c``, ``supply_v``, a noisy logger whose values all differ, so that no value
+    is "most common") the median of the logged values, which one row still on the ramp into
+    the segment does not move far. Neither is changed by a slow logger's blanks between its
+    rows (a chamber logging every 10th row: its set point, not NaN, is the segment's).
 
     >>> d = pd.DataFrame({"test": ["sf"] * 4, "run": [0] * 4, "step": [0] * 4,
     ...                   "rate_dps": [10.0, 100.0, 100.0, 100.0]})
@@ -585,12 +588,22 @@ def segment_values(df: pd.DataFrame, cols) -> pd.DataFrame:
     ...                   "temperature_c": [float("nan"), float("nan"), 70.0] + [float("nan")] * 2})
     >>> segment_values(d, ["temperature_c"])["temperature_c"].tolist()
     [70.0, nan]
+    >>> d = pd.DataFrame({"test": ["t"] * 5, "run": [0] * 5, "step": [0] * 5,
+    ...                   "temperature_c": [45.0, 69.91, 70.04, 69.97, 70.02]})
+    >>> segment_values(d, ["temperature_c"])["temperature_c"].tolist()
+    [69.97]
     """
     keys = ["test", "run", "step"]
     if not cols:
         return df.groupby(keys, sort=False).first().reset_index()[keys]
-    return (df.groupby(keys, sort=False)[list(cols)].agg(_most_common_logged)
-            .reset_index())
+    how = {c: (_median_logged if c in MEASURED else _most_common_logged) for c in cols}
+    return df.groupby(keys, sort=False)[list(cols)].agg(how).reset_index()
+
+
+def _median_logged(v: pd.Series):
+    """The median of ``v``'s logged (not blank, numeric) cells; NaN where none is logged."""
+    x = pd.to_numeric(v, errors="coerce").dropna()
+    return float(x.median()) if len(x) else np.nan
 
 
 def _most_common_logged(v: pd.Series):
@@ -605,9 +618,10 @@ def missing_points(df: pd.DataFrame, expected: dict, *, file=None,
     """``expected``: {(test, run): [(what, value), …]} with ``what`` a column (``rate_dps``,
     ``temperature_c``, ``supply_v``, ``up_axis``, ``stand_deg``) and the value each planned
     segment of that run has; a value absent from the readings' segments is named. A run
-    absent altogether is named once. A segment's value is the one most of its rows give
-    (:func:`segment_values`): one row's typo in the set-point column is that row's finding,
-    not a planned point missing."""
+    absent altogether is named once. A segment's value is its setting
+    (:func:`segment_values`: the value most of its rows give for a set column, the median of
+    the logged values for a measured one): one row's typo in the set-point column, or a
+    measured row still on the ramp, is that row's finding, not a planned point missing."""
     out = []
     clauses = clauses or {}
     cols = sorted({what for wants in expected.values() for what, _ in wants} & set(df.columns))
