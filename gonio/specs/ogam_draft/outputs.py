@@ -19,6 +19,7 @@ from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
+from gonio.specs.ogam_draft.stored import complete_stored
 from gonio.report.header import room_temperature_keys
 from gonio.report.i18n import finding_text, labels
 from gonio.result.findings import stated_findings
@@ -47,10 +48,12 @@ def warnings(result: Result) -> list[str]:
 def write(result: Result, out, *, truth: dict | None = None, lab=None,
           lang: str = "en", dcc: bool = False) -> dict[str, Path]:
     """results.json, summary.txt, tables/*.csv and the certificate (``dcc``: its DCC XML)
-    into ``out`` (the caller stages the set and has decided conformity)."""
+    into ``out`` (the caller stages the set and has decided conformity). A stored result
+    written by an earlier gonio renders with the fields it lacks derived
+    (:func:`gonio.specs.ogam_draft.stored.complete_stored`), or is refused in one line."""
     paths = dict(write_calibration(result, out, lab=lab))
-    paths.update(write_certificate(result.to_json(), out, truth=truth, lab=lab, lang=lang,
-                                   dcc=dcc))
+    paths.update(write_certificate(complete_stored(result.to_json()), out, truth=truth,
+                                   lab=lab, lang=lang, dcc=dcc))
     return paths
 
 
@@ -69,7 +72,7 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     then the budget's notes (an item stated by its interval, B_s and R, has that one
     statement in the table); from the result or its results.json."""
     result = result if isinstance(result, Result) else Result.from_json(result)
-    d = result.to_json()
+    d = complete_stored(result.to_json())
     lines = virtual_line(d) + identity_lines(d.get("findings"), d.get("metadata") or {}, lab,
                                            room_temperature_keys(d.get("spec"))) \
         + [summary_text(d, "en", lab).rstrip("\n")]
