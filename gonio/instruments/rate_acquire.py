@@ -31,7 +31,6 @@ time since its power-on, so a cycle is never continued in the middle).
 
 from __future__ import annotations
 
-import datetime as _dt
 import math
 import signal
 import sys
@@ -43,7 +42,8 @@ import numpy as np
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import COLUMNS as RATE_COLUMNS
-from gonio.instruments.run import ModuleClock, ReadingsFile, raise_stop, stop_reason
+from gonio.instruments.run import (ModuleClock, ReadingsFile, laboratory_date_text, raise_stop,
+                                  stop_reason)
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.rate import Chamber, GyroOutput, RateTable, Supply
 from gonio.progress import format_duration, status
@@ -270,7 +270,7 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
             md[f"{role}_idn"] = drv.identify()
         check_rate_programme(segments, d["table"])
         md.update(_stated(d["gyro"], metadata))
-        md.update({"date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d"),
+        md.update({"date": laboratory_date_text(),
                    "generator": f"gonio {__version__} acquire"})
         writer = ReadingsFile(path, md, rows, columns=RATE_COLUMNS)
         nominal = md.get("supply_nominal_v")

@@ -1,7 +1,8 @@
 """What every acquisition through the instruments shares: the readings file written as the
 readings come (:class:`ReadingsFile`), waits timed on the instrument's own clock
-(:class:`ModuleClock`), what a run left (:class:`AcquisitionResult`) and how a stop is told
-(:func:`raise_stop`, :func:`stop_reason`).
+(:class:`ModuleClock`), what a run left (:class:`AcquisitionResult`), how a stop is told
+(:func:`raise_stop`, :func:`stop_reason`) and the readings' ``# date:``
+(:func:`laboratory_date_text`).
 
 Used by :mod:`gonio.instruments.rate_acquire` (a rate specification's segment programme) and
 by a specification that runs its own programme through its ``acquire`` hook (the goniometer's
@@ -10,6 +11,7 @@ table and acquisition module).
 
 from __future__ import annotations
 
+import datetime as _dt
 import os
 import time
 from dataclasses import dataclass
@@ -17,6 +19,20 @@ from pathlib import Path
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError
+
+
+def laboratory_date_text(at: _dt.datetime | None = None) -> str:
+    """The readings' ``# date:``: the laboratory's calendar date (YYYY-MM-DD) at ``at`` (an
+    aware time; None: now), in the bench computer's local time zone (the ``TZ`` environment
+    variable, else the system's) — the laboratory's date, as the records' dates are
+    (``gonio.records.models.records_today``; their setting ``timezone`` unset is that zone),
+    not UTC's, which is the day before in Beijing until 08:00 (tests/test_acquisition_date.py).
+
+    >>> len(laboratory_date_text()), laboratory_date_text()[4]
+    (10, '-')
+    """
+    at = _dt.datetime.now(_dt.timezone.utc) if at is None else at
+    return at.astimezone().strftime("%Y-%m-%d")
 
 
 class ReadingsFile:

@@ -33,7 +33,6 @@ rests has its own zeroing, so an interrupted estimate continues at its next posi
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import math
 import signal
 import sys
@@ -44,8 +43,8 @@ from pathlib import Path
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.acquisition_module import AcquisitionModule
-from gonio.instruments.run import (AcquisitionResult, ModuleClock, ReadingsFile, raise_stop,
-                                  stop_reason)
+from gonio.instruments.run import (AcquisitionResult, ModuleClock, ReadingsFile,
+                                  laboratory_date_text, raise_stop, stop_reason)
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.table import RotaryTable, TableLimits
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
@@ -523,7 +522,7 @@ def _instrument_metadata(protocol: Protocol, gyro: AcquisitionModule, lim: Table
     md.update({"table_accel_dps2": repr(lim.accel_dps2),
                "tilt_bound_deg": repr(protocol.annex_a.tilt_bound_deg),
                "protocol": protocol.name,
-               "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d"),
+               "date": laboratory_date_text(),
                "generator": f"gonio {__version__} acquire"})
     return md
 
