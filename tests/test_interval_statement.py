@@ -101,3 +101,29 @@ def test_half_range_upper_limit_covers():
                                         "coverage_probability": 0.95,
                                         "interval": [0.0, 0.2 * factor]}})
     assert s.text() == "0.20 °/s; upper bound: ≤ 0.79 °/s (interval [0, 0.79], p = 95 %)"
+
+
+def test_normal_range_integrals_equal_the_norm_cdf_integrands():
+    """normal_range_cdf and normal_range_mean evaluate φ and Φ without scipy.stats' argument
+    checks (for speed: half_range_upper's root search called them for seconds per
+    calibration): the same integrals written here with scipy.stats.norm give the same
+    numbers bit for bit, and so the same limit."""
+    from scipy import integrate, optimize
+
+    from gonio.specs.iec62047_20.formulas import (half_range_upper, normal_range_cdf,
+                                                  normal_range_mean)
+
+    def cdf_here(w, n):
+        f = lambda x: stats.norm.pdf(x) * (stats.norm.cdf(x + w) - stats.norm.cdf(x)) ** (n - 1)  # noqa: E731
+        return float(min(1.0, n * integrate.quad(f, -12.0, 12.0, limit=200)[0]))
+
+    def mean_here(n):
+        f = lambda x: 1.0 - stats.norm.cdf(x) ** n - stats.norm.sf(x) ** n  # noqa: E731
+        return float(integrate.quad(f, -12.0, 12.0, limit=200)[0])
+
+    for n in (2, 3, 5):
+        for w in (0.43, 1.0, 3.314):
+            assert normal_range_cdf(w, n) == cdf_here(w, n)
+        assert normal_range_mean(n) == mean_here(n)
+    w = optimize.brentq(lambda x: cdf_here(x, 3) - (1.0 - 0.95), 1e-9, 40.0, xtol=1e-12)
+    assert half_range_upper(1.0, 3) == float(1.0 * mean_here(3) / w)

@@ -272,12 +272,23 @@ def normal_range_cdf(w: float, n: int) -> float:
     >>> round(normal_range_cdf(3.314, 3), 3)     # Pearson–Hartley table: w_0.95(3) = 3.314
     0.95
     """
-    from scipy import integrate, stats
+    from scipy import integrate
+    from scipy.special import ndtr
 
     if w <= 0:
         return 0.0
-    f = lambda x: stats.norm.pdf(x) * (stats.norm.cdf(x + w) - stats.norm.cdf(x)) ** (n - 1)  # noqa: E731
+    f = lambda x: _phi(x) * (ndtr(x + w) - ndtr(x)) ** (n - 1)  # noqa: E731
     return float(min(1.0, n * integrate.quad(f, -12.0, 12.0, limit=200)[0]))
+
+
+def _phi(x):
+    """φ(x) as ``scipy.stats.norm.pdf`` evaluates it (exp(−x²/2)/√(2π)), bit for bit, without
+    its argument checks: the integrands here are called thousands of times inside a root
+    search; Φ is ``scipy.special.ndtr`` (norm.cdf's own evaluation)."""
+    return np.exp(-np.asarray(x, dtype=float) ** 2 / 2.0) / _SQRT_2PI
+
+
+_SQRT_2PI = np.sqrt(2 * np.pi)
 
 
 def normal_range_mean(n: int) -> float:
@@ -286,9 +297,10 @@ def normal_range_mean(n: int) -> float:
     >>> round(normal_range_mean(2), 4), round(normal_range_mean(3), 4)   # 2/√π, d₃ = 1.693
     (1.1284, 1.6926)
     """
-    from scipy import integrate, stats
+    from scipy import integrate
+    from scipy.special import ndtr
 
-    f = lambda x: 1.0 - stats.norm.cdf(x) ** n - stats.norm.sf(x) ** n  # noqa: E731
+    f = lambda x: 1.0 - ndtr(x) ** n - ndtr(-x) ** n  # noqa: E731
     return float(integrate.quad(f, -12.0, 12.0, limit=200)[0])
 
 
