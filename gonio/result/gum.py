@@ -144,6 +144,29 @@ def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
                        interval=(0.0, s + U))
 
 
+def budget_nu(u: Uncertainty) -> float:
+    """ν_eff of the combined standard uncertainty u_c of ``u``'s budget, by
+    Welch–Satterthwaite over its lines (JCGM 100 G.4.1, eq. (G.2b): u_c⁴ / Σ u_i(y)⁴/ν_i,
+    a line without ν infinite): the ν an item computed from this one carries with u_c.
+
+    Not ``u.nu_eff`` where the statement is not U = k·u_c of the whole budget (a bound
+    condition's ν_eff is its rest's, ν_rest; a χ² or extreme interval states none): the
+    lines are what u_c is made of. ∞ where no line has a finite ν or u_c is 0.
+
+    >>> u = Uncertainty([{"contribution": 3.0, "dof": 2.0}, {"contribution": 4.0,
+    ...                   "dof": None}], 5.0, 10.0, None, 2.0, None, 0.95)
+    >>> round(budget_nu(u), 3)                 # 5⁴ / (3⁴/2) = 625/40.5
+    15.432
+    """
+    from uncertainty import welch_satterthwaite
+
+    rows = [(float(c.get("contribution") or 0.0),
+             math.inf if c.get("dof") is None else float(c["dof"])) for c in u.components]
+    if not (u.u_c and u.u_c > 0) or not rows:
+        return math.inf
+    return welch_satterthwaite(u.u_c, [r[0] for r in rows], [r[1] for r in rows])
+
+
 #: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of
 #: magnitudes (:func:`max_magnitude_statement`; defined with the statement rule).
 K_SOURCE_MAX_MAGNITUDE = _K_SOURCE_MAX_MAGNITUDE

@@ -23,7 +23,7 @@ from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.result.gum import (dispersion_uncertainty, gum, max_magnitude_statement,
+from gonio.result.gum import (budget_nu, dispersion_uncertainty, gum, max_magnitude_statement,
                               std_dev_uncertainty)
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.result.statement import K_SOURCE_SELECTED_MAX
@@ -39,12 +39,14 @@ from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b, welch_satterthwaite
 @dataclass(kw_only=True)
 class Context(RateContext):
     """The shared rate context with IEC 62047-20's typical scale factor, base temperature and
-    supply, and a_BASE once computed."""
+    supply, and a_BASE once computed (with its relative u_c and that u_c's ν)."""
 
     a_typ: float
     t_base_c: float
     v_base: float
     a_base: float | None = None
+    a_base_u_rel: float | None = None
+    a_base_nu: float = math.inf
 
 
 def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:
@@ -1408,7 +1410,7 @@ def initial_bias_variation(ctx: Context) -> Item:
     b = bias(ctx)
     typ = ctx.protocol["power_on"]["nominal_bias_dps"]
     u = gum(lambda x: x - typ, [from_u("N_bias", b.value, b.uncertainty.u_c,
-                                       dof=b.uncertainty.nu_eff, source="bias of 5.3.3.1")])
+                                       dof=budget_nu(b.uncertainty), source="bias of 5.3.3.1")])
     return Item("initial_bias_variation", t, cl, un, b.value - typ, uncertainty=u,
                 details={"nominal_bias_dps": typ})
 
@@ -2501,7 +2503,8 @@ def g_sensitivity(ctx: Context) -> Item:
 
     Uncertainty: the slope's least-squares standard error (ν = points − 3), the bias drift
     over the turn (correlated from angle to angle, so the residuals miss it) projected on
-    the regressor, and the scale factor (relative)."""
+    the regressor, and a_BASE's relative u_c with its ν (:func:`_e_a`; the rate table's
+    line alone was a part of it, of ν = ∞)."""
     t, cl, un = "linear g sensitivity", "5.3.3.8", "(°/s)/g"
     m = _miss(ctx, "g_sensitivity", "g_sensitivity", t, cl, un)
     if m:
@@ -2547,7 +2550,7 @@ def g_sensitivity(ctx: Context) -> Item:
                     from_u("drift", 0.0, u_dr_, dof=DOF_U_WITHIN_10PCT,
                            source="bias drift over the turn projected on the regressor, "
                                   "u_drift(duration)·√(2/n)"),
-                    rate_table_line("e_K", ctx.rate_table_u_rel, "scale factor, relative")])
+                    _e_a(ctx)])
 
     names = list(res)
     pts = [point(n) for n in names]
@@ -2829,11 +2832,28 @@ def max_outcome_upper_end(pmf: dict, m_b: float, s_b: float, lo: float, hi: floa
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
     """The context of an item: the calibration's, with a_BASE from the scale-factor item
-    (5.1.3.1) when it was measured (items read it; none writes it)."""
+    (5.1.3.1) when it was measured, its relative u_c and the ν of that u_c
+    (:func:`gonio.result.gum.budget_nu`: Welch–Satterthwaite over a_BASE's budget lines,
+    also where a_BASE is stated by its bound condition); items read them, none writes them."""
     sf = done.get("scale_factor")
     if sf is None or not sf.measured:
         return ctx
-    return replace(ctx, a_base=sf.value)
+    if sf.uncertainty is None or not sf.value:
+        return replace(ctx, a_base=sf.value)
+    return replace(ctx, a_base=sf.value, a_base_u_rel=sf.uncertainty.u_c / abs(sf.value),
+                   a_base_nu=budget_nu(sf.uncertainty))
+
+
+def _e_a(ctx: Context):
+    """The budget line of a_BASE's relative error in an item divided by it (5.1.3.1):
+    u_c(a_BASE)/|a_BASE| with the ν of u_c (``a_base_nu``), so that the item's ν_eff carries
+    the slope's noise a_BASE rests on (JCGM 100 G.4.1). Where a_BASE's u_c is not known (an
+    item computed alone), the rate table's line (:func:`rate_table_line`) stands for it."""
+    if ctx.a_base_u_rel is None:
+        return rate_table_line("e_K", ctx.rate_table_u_rel, "scale factor, relative: the "
+                               "rate table's line alone (a_BASE's u_c not known)")
+    return from_u("e_K", 0.0, ctx.a_base_u_rel, dof=ctx.a_base_nu, type="B",
+                  source="scale factor, relative: u_c(a_BASE)/a_BASE of 5.1.3.1, with its ν_eff")
 
 
 #: The characteristics in the order of Table 4: (key, title, clause, function).

@@ -26,8 +26,8 @@ from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.stream import value_range
-from gonio.result.gum import (dispersion_uncertainty, gum, max_magnitude_statement,
-                              std_dev_uncertainty)
+from gonio.result.gum import (budget_nu, dispersion_uncertainty, gum,
+                              max_magnitude_statement, std_dev_uncertainty)
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
                                                    segment_samples, sf_calibration_means,
@@ -47,6 +47,7 @@ class Context(RateContext):
     cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
     K: float | None = None                    # K̄ of 7.2.1 once computed
     u_K_rel: float | None = None
+    u_K_nu: float = math.inf                  # ν of u_c(K) (Welch–Satterthwaite of its budget)
     rate_table_ripple_rel: float = 5.0e-4     # Table 2's rate smoothness 0.05 % (7.2.3)
 
 
@@ -56,6 +57,15 @@ def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str)
     if ctx.K is None and key not in ("scale_factor",):
         return not_measured(key, title, clause, unit, "needs the scale factor of 7.2.1")
     return None
+
+
+def _e_K(ctx: Context):
+    """The budget line of K̄'s relative error in an item computed with K (7.2.1): u_c(K)/|K̄|
+    with the ν of u_c(K) (``u_K_nu``), so that the item's ν_eff, and the k computed from it,
+    carry the few calibrations K rests on (JCGM 100 G.4.1: every line with its own ν; as a
+    line of ν = ∞ a short programme's K, ν 2, gave its items a normal k)."""
+    return from_u("e_K", 0.0, ctx.u_K_rel or 0.0, dof=ctx.u_K_nu, type="B",
+                  source="scale factor, relative: u_c(K)/K̄ of 7.2.1, with its ν_eff")
 
 
 def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
@@ -656,7 +666,7 @@ def bias(ctx: Context) -> Item:
         * math.sin(math.radians(ctx.axis_alignment_deg))
     inputs = [from_u("B", float(b.mean()), s_mean, dof=nu,
                      source="mean of the Q records (type A)"),
-              from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
+              _e_K(ctx),
               type_b("E_align", 0.0, align, "rectangular",
                      source="input-axis alignment × horizontal Earth rate"),
               from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(
@@ -699,7 +709,7 @@ def bias_stability(ctx: Context) -> Item:
                  dof=nu_b, source="sampling of B_s: effective ν of the records' correlated "
                                   "block means (variogram: white, flicker, random walk)")
     u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", value, 0.0), u_a,
-                                                from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+                                                _e_K(ctx)])
     u = dispersion_uncertainty(value, u)
     return Item("bias_stability", title, clause, unit, value, uncertainty=u,
                 details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk,
@@ -839,8 +849,7 @@ def g_sensitivity(ctx: Context) -> Item:
                   from_u("E_n", n["earth"] * S_PER_H, 0.0, type="B"),
                   type_b("x_E", 0.0, xbound, "rectangular",
                          source="cross-axis coupling of the Earth rate (bound)"),
-                  from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B",
-                         source="scale factor, relative"),
+                  _e_K(ctx),
                   from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=DOF_U_WITHIN_10PCT,
                          source="bias drift between the two positions (Allan fit: RRW, BI)")]
         return gum(lambda a, b, c, d, x, e, dr: (((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
@@ -900,7 +909,7 @@ def angle_random_walk(ctx: Context) -> Item:
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=DOF_U_WITHIN_10PCT,
                                               source="five-term AVAR fit with band-limited "
                                                      "flicker, u(N)"),
-                                       from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+                                       _e_K(ctx)])
     u = dispersion_uncertainty(arw, u)   # a dispersion: its one-sided χ² interval alone
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
         "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
@@ -1062,13 +1071,15 @@ NEEDS = {key: ("scale_factor",) for key in (
 
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
-    """The context of an item: the calibration's, with K̄ and its relative standard
-    uncertainty from the scale-factor item when it was measured (items read them; none
-    writes them)."""
+    """The context of an item: the calibration's, with K̄, its relative standard
+    uncertainty and that uncertainty's ν (:func:`gonio.result.gum.budget_nu`: Welch–
+    Satterthwaite over K's budget lines, also where K is stated by its bound condition)
+    from the scale-factor item when it was measured (items read them; none writes them)."""
     sf = done.get("scale_factor")
     if sf is None or not sf.measured or sf.uncertainty is None:
         return ctx
-    return replace(ctx, K=sf.value, u_K_rel=sf.uncertainty.u_c / abs(sf.value))
+    return replace(ctx, K=sf.value, u_K_rel=sf.uncertainty.u_c / abs(sf.value),
+                   u_K_nu=budget_nu(sf.uncertainty))
 
 
 #: Table 3 in order: (key, title, clause, function).
