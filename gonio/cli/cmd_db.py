@@ -25,8 +25,9 @@ def register(sub) -> None:
         q.add_argument("--" + k.replace("_", "-"), dest=k, default=None)
     q.add_argument("--timezone", default=None,
                    help="the laboratory's time zone, an IANA name (e.g. Asia/Shanghai): the "
-                        "records' calendar dates and 'today' are its dates (default: the "
-                        "machine's local zone)")
+                        "records' calendar dates and 'today' are its dates (default: this "
+                        "machine's IANA zone, UTC where it cannot be determined; written once "
+                        "into the store, which every process then reads)")
     q.set_defaults(func=run_init)
     q = dsub.add_parser("create-user", help="add a user (password from $GONIO_PASSWORD or asked)")
     add_store_options(q)

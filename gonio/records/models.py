@@ -37,15 +37,15 @@ def utcnow() -> _dt.datetime:
 
 def laboratory_zone(name: str = "") -> _dt.tzinfo | None:
     """The laboratory's time zone: the IANA name ``name`` (the records' setting
-    ``timezone``, e.g. ``Asia/Shanghai``) read by :mod:`zoneinfo`, or None for "" — the
-    machine's local zone. An unknown name is a GonioError naming the setting.
+    ``timezone``, e.g. ``Asia/Shanghai``) read by :mod:`zoneinfo`, or None for "" (read as
+    UTC by :func:`laboratory_date`; a store holds an explicit zone, :func:`machine_zone`). An unknown name is a GonioError naming the setting.
 
     >>> laboratory_zone("Asia/Shanghai")
     zoneinfo.ZoneInfo(key='Asia/Shanghai')
     >>> laboratory_zone("Mars/Olympus")
     Traceback (most recent call last):
     ...
-    gonio.errors.GonioError: key timezone: 'Mars/Olympus' is not a time zone of the IANA database (e.g. Asia/Shanghai, Europe/Berlin, UTC; empty: the machine's local zone)
+    gonio.errors.GonioError: key timezone: 'Mars/Olympus' is not a time zone of the IANA database (e.g. Asia/Shanghai, Europe/Berlin, UTC)
     """
     import zoneinfo
 
@@ -57,14 +57,14 @@ def laboratory_zone(name: str = "") -> _dt.tzinfo | None:
         return zoneinfo.ZoneInfo(name)
     except (zoneinfo.ZoneInfoNotFoundError, ValueError, TypeError):
         raise GonioError(f"{name!r} is not a time zone of the IANA database (e.g. "
-                         "Asia/Shanghai, Europe/Berlin, UTC; empty: the machine's local zone)",
+                         "Asia/Shanghai, Europe/Berlin, UTC)",
                          key="timezone") from None
 
 
 def laboratory_date(at_utc: _dt.datetime, zone: str = "") -> _dt.date:
     """The laboratory's calendar date at the naive UTC time ``at_utc`` (what the records'
-    times hold), in its time zone ``zone`` (:func:`laboratory_zone`; "" the machine's local
-    zone). The one conversion from the records' UTC times to the laboratory's calendar dates
+    times hold), in its time zone ``zone`` (:func:`laboratory_zone`; "" UTC, the same in
+    every process: never the process's local zone). The one conversion from the records' UTC times to the laboratory's calendar dates
     (calibration date, due dates, date of issue): 23:30 UTC on 2026-12-01 is 2026-12-02 in
     Beijing and still 2026-12-01 in Los Angeles.
 
@@ -76,20 +76,57 @@ def laboratory_date(at_utc: _dt.datetime, zone: str = "") -> _dt.date:
     """
     aware = at_utc.replace(tzinfo=_dt.timezone.utc)
     tz = laboratory_zone(zone)
-    return (aware.astimezone() if tz is None else aware.astimezone(tz)).date()
+    return aware.astimezone(_dt.timezone.utc if tz is None else tz).date()
+
+
+def machine_zone() -> str:
+    """This machine's IANA time zone name, written once into a store's setting ``timezone``
+    (by ``gonio db init`` and the migration that brings a store without it up to date), so
+    that every process on the store reads that one zone, never its own: ``TZ`` where it names
+    an IANA zone, else ``/etc/timezone``, else the ``zoneinfo/`` link of ``/etc/localtime``;
+    "UTC" where none of them names one (the settings page then shows UTC, which an
+    administrator changes to the laboratory's zone)."""
+    import os
+    from pathlib import Path
+
+    cands = [os.environ.get("TZ", "").lstrip(":")]
+    try:
+        cands.append(Path("/etc/timezone").read_text(encoding="utf-8").strip())
+    except OSError:
+        pass
+    try:
+        link = os.path.realpath("/etc/localtime")
+        if "zoneinfo/" in link:
+            cands.append(link.split("zoneinfo/", 1)[1])
+    except OSError:
+        pass
+    for name in cands:
+        if name and "/" not in name[:1] and _is_zone(name):
+            return name
+    return "UTC"
+
+
+def _is_zone(name: str) -> bool:
+    import zoneinfo
+
+    try:
+        zoneinfo.ZoneInfo(name)
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError, TypeError):
+        return False
+    return True
 
 
 def records_zone(store) -> str:
     """The laboratory's time zone as the records ``store`` (a store, or an open SQLAlchemy
-    session of one) hold it: the setting ``timezone`` ("" where never set: the machine's
-    local zone)."""
+    session of one) hold it: the setting ``timezone`` (written at ``gonio db init`` and by the
+    migration of an older store, :func:`machine_zone`; "UTC" where a store holds none)."""
     get = getattr(store, "get", None)
     if get is not None and hasattr(store, "scalars"):          # an open session
         row = store.get(Setting, "timezone")
     else:
         with store.session() as s:
             row = s.get(Setting, "timezone")
-    return row.value if row is not None else ""
+    return row.value if row is not None and row.value else "UTC"
 
 
 def records_today(store) -> _dt.date:

@@ -62,7 +62,7 @@ _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
 SETTINGS = {"lab_name": "Calibration laboratory", "lab_address": "(address not set)",
             "lab_accreditation": "", "lab_contact": "", "lab_place": "",
             "decision_rule": "non-binary", "guard_band_factor": "1.0", "min_people": "3",
-            "table_calibration_max_months": "24", "timezone": ""}
+            "table_calibration_max_months": "24", "timezone": "UTC"}
 
 #: The longest a rotary table's calibration may be registered for (months from its valid
 #: from to its due date; the setting ``table_calibration_max_months`` is the laboratory's
@@ -341,7 +341,10 @@ def check_setting(key: str, value) -> str:
             and 1 <= int(value) <= MAX_TABLE_INTERVAL_MONTHS):
         raise GonioError(f"a whole number of months, 1 … {MAX_TABLE_INTERVAL_MONTHS}", key=key)
     if key == "timezone":
-        laboratory_zone(value)      # an IANA name (zoneinfo), "": the machine's local zone
+        if not value:
+            raise GonioError("must not be empty (an IANA zone such as Asia/Shanghai, or UTC): "
+                             "every process on the records reads this one zone", key=key)
+        laboratory_zone(value)      # an IANA name (zoneinfo)
     if key == "guard_band_factor":
         number_value(value, key, 0, 1e6)
         if not value:

@@ -26,9 +26,10 @@ BACKDATED = dt.datetime(2025, 1, 15, tzinfo=dt.timezone.utc).timestamp()
 
 
 def utc_today() -> dt.date:
-    """The laboratory's date now in the machine's local zone (the records' default zone)."""
+    """The laboratory's date now in the zone a new store holds (this machine's zone, written
+    when the store is made)."""
     from gonio.records import models
-    return models.laboratory_date(models.utcnow())
+    return models.laboratory_date(models.utcnow(), models.machine_zone())
 
 
 def backdated_copy(computed_folder, bench_readings, tmp_path):

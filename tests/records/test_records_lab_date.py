@@ -1,7 +1,8 @@
 """The records' calendar dates are the laboratory's (docs/records.md, "Dates and settings"):
 the times stay UTC, but "today" of every date rule (a calibration date not in the future, the
 form's default and maximum, a standard past its due date, the due list) is the laboratory's
-date in its time zone, the setting ``timezone`` (an IANA name; "" the machine's local zone).
+date in its time zone, the setting ``timezone`` (an IANA name the store holds, written once at ``gonio db init`` or
+at the migration of an older store: never each process's own local zone).
 The clock is patched: at 23:30 UTC on 2026-12-01 it is 07:30 on 2026-12-02 in Beijing
 (UTC+8, no daylight saving) and 15:30 on 2026-12-01 in Los Angeles (UTC-8 in December), the
 expected dates worked out by hand from those offsets. Nothing reads the date at import: the
@@ -98,20 +99,78 @@ def test_west_of_utc_after_utc_midnight(sqlite_store, monkeypatch):
     assert not models.is_past_due(dt.date(2026, 12, 1), today)
 
 
-def test_default_zone_is_the_machines(sqlite_store, clock, monkeypatch):
-    """Without the setting the machine's local zone (TZ) decides."""
+def _in_process(tz: str, data, code: str) -> str:
+    """``code`` run by a new Python process with TZ=``tz`` (its local zone) on the store in
+    ``data``; its stdout."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "TZ": tz}
+    pre = ("import datetime as dt; from gonio.records.db import open_store; "
+           "from gonio.records import models; "
+           f"st = open_store(None, {str(data)!r}); ")
+    r = subprocess.run([sys.executable, "-c", pre + code], env=env, capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    return r.stdout.strip()
+
+
+def test_one_zone_for_every_process_on_the_store(tmp_path):
+    """The store made by a process in Beijing holds Asia/Shanghai; processes in Los Angeles
+    and UTC read that zone and the same laboratory date at 23:30 UTC (2026-12-02, by hand:
+    UTC+8), not their own (2026-12-01)."""
+    data = tmp_path / "data"
+    assert _in_process(BEIJING, data, "print(models.records_zone(st))") == BEIJING
+    ask = ("z = models.records_zone(st); "
+           "print(z, models.laboratory_date(dt.datetime(2026, 12, 1, 23, 30), z))")
+    for tz in (LOS_ANGELES, "UTC", BEIJING):
+        assert _in_process(tz, data, ask) == f"{BEIJING} 2026-12-02", tz
+
+
+def test_a_store_without_the_setting_gets_one_zone(tmp_path, monkeypatch):
+    """A store from before the setting was written (at migration 0012, no ``timezone`` row)
+    gets this machine's zone once, at its migration; a later process elsewhere keeps it."""
+    from gonio.records.db import data_folder, database_url, make_engine, migrate
+
+    data = tmp_path / "data"
+    folder = data_folder(data)
+    engine = make_engine(database_url(None, folder))
+    migrate(engine, "0012")
+    with engine.begin() as conn:
+        conn.exec_driver_sql("DELETE FROM settings WHERE key = 'timezone'")
+    engine.dispose()
+    assert _in_process("Europe/Berlin", data, "print(models.records_zone(st))") == "Europe/Berlin"
+    assert _in_process(BEIJING, data, "print(models.records_zone(st))") == "Europe/Berlin"
+
+
+def test_an_empty_zone_is_utc_in_every_process(monkeypatch):
+    """No per-process fallback: "" reads as UTC whatever the process's TZ."""
     time = pytest.importorskip("time")
     if not hasattr(time, "tzset"):
         pytest.skip("no time.tzset on this platform")
     try:
-        for tz, want in ((BEIJING, dt.date(2026, 12, 2)), (LOS_ANGELES, dt.date(2026, 12, 1))):
+        for tz in (BEIJING, LOS_ANGELES):
             monkeypatch.setenv("TZ", tz)
             time.tzset()
-            assert services.settings(sqlite_store)["timezone"] == ""
-            assert models.records_today(sqlite_store) == want, tz
+            assert models.laboratory_date(AT, "") == dt.date(2026, 12, 1), tz
     finally:
         monkeypatch.delenv("TZ")
         time.tzset()
+
+
+def test_machine_zone_is_tz_or_utc(monkeypatch):
+    monkeypatch.setenv("TZ", BEIJING)
+    assert models.machine_zone() == BEIJING
+    monkeypatch.setenv("TZ", "Mars/Olympus")
+    assert models.laboratory_zone(models.machine_zone()) is not None   # some IANA zone or UTC
+
+
+def test_an_empty_zone_is_refused(sqlite_store):
+    before = services.settings(sqlite_store)["timezone"]
+    with pytest.raises(GonioError, match=r"^key timezone: must not be empty"):
+        services.set_settings(sqlite_store, None, timezone="")
+    assert services.settings(sqlite_store)["timezone"] == before != ""
 
 
 @pytest.mark.parametrize("bad", ["Mars/Olympus", "Asia/../etc/passwd", "+08:00"])
@@ -120,7 +179,7 @@ def test_unknown_zone_refused_nothing_stored(sqlite_store, bad):
                                          r"database") as e:
         services.set_settings(sqlite_store, None, timezone=bad)
     assert "\n" not in str(e.value)
-    assert services.settings(sqlite_store)["timezone"] == ""
+    assert services.settings(sqlite_store)["timezone"] == models.records_zone(sqlite_store) != ""
 
 
 def test_form_and_lists_take_the_laboratorys_date(app, clock):  # noqa: F811

@@ -27,9 +27,10 @@ TODAY: dt.date        # the service's today (the laboratory's date), read as eac
 
 
 def lab_today() -> dt.date:
-    """The records' today where the database sets no zone: the machine's local date."""
+    """The records' today of a new store: the date in the zone it was given when it was made
+    (this machine's, :func:`gonio.records.models.machine_zone`)."""
     from gonio.records import models
-    return models.laboratory_date(models.utcnow())
+    return models.laboratory_date(models.utcnow(), models.machine_zone())
 
 
 @pytest.fixture(autouse=True)
