@@ -87,11 +87,18 @@ def test_iec_statement_covers_both_bounds_at_one_sign(iec, key):
     (1 + e_table) evaluated there, exactly), plus t_95(ν_rest)·u_rest of the other lines; the
     quadrature k·u_c of the same budget is shorter than that shift alone, so a statement
     of the quadrature fails here."""
-    *_, truth, res = iec
+    _, _, readings, truth, res = iec
     it = res.items[key]
     rows = _rows(it)
-    h_tu = math.sqrt(3.0) * rows["e_TU"]["u"]           # the rectangular line's half-width
-    assert h_tu > 1e-4                                  # the gyro 3 °C off at T_BASE: a line
+    h_est = math.sqrt(3.0) * rows["e_TU"]["u"]          # the budget's line: the estimate's
+    assert h_est > 1e-4                                 # the gyro 3 °C off at T_BASE: a line
+    # the bound takes T_c,SF/a at its 95 % far end, |T_c| + U of 5.1.3.4's own statement
+    # (%/°C), times the chamber's deviation bound + half its uniformity (the readings')
+    md = readings.metadata
+    bound_c = float(md["chamber_deviation_bound_c"]) + float(md["chamber_uniformity_c"]) / 2
+    tc = res.items["sf_temperature_coefficient"]
+    h_tu = bound_c * (abs(tc.value) + tc.U) / 100
+    assert h_tu > h_est
     a_base = res.items["scale_factor"].value
     shifted = a_base * (1 + h_tu) / (1 - TABLE2_RATE)   # both bounds, one sign
     shift = abs(shifted - a_base) if key == "scale_factor" else \

@@ -164,6 +164,13 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
     return r
 
 
+#: what a bound-condition interval is, in the DCC's words
+BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the bounded errors (the "
+                  "table's; the item's other bounded lines) at their bounds in their worst "
+                  "combination, a, plus k·u of the other lines; no "
+                  "standard uncertainty of the item is certified")
+
+
 def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str) -> None:
     """An interval stated without a standard uncertainty (an item whose certificate states
     no u_c: :func:`gonio.report.item_dcc.u_c_certified` false; the optical E where each

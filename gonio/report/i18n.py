@@ -216,15 +216,19 @@ LABELS: dict[str, dict[str, str]] = {
                            "自身 χ² 检验所得最大真标准偏差的 95 % 区间给出：上端为各记录自身 χ² 上限中的"
                            "最大者，下端为各记录按多重比较（西达克）校正水平的下限中的最大者，对任何真标准偏差与记录长度"
                            "均成立"},
-    "k_iv_bound": {"en": "a quantity bounded errors enter (the rate table's; for a rate gyro "
-                         "without a certificate u for its table, the table's bound and the "
-                         "chamber's temperature error) by its bound-condition interval "
-                         "value ± (a + k·u): those errors at their bounds in their worst "
-                         "combination, added linearly, a, plus k·u of the other lines (ν "
-                         "stated is theirs), which holds at every error within the bounds",
-                   "zh": "受有界误差影响的量（转台误差；速率陀螺转台未给出校准证书不确定度时，为转台的"
-                         "界限与温箱温度误差）给出其界限条件区间 值 ± (a + k·u)：这些误差取其界限按最不利"
-                         "组合线性相加为 a，加上其他分量的 k·u（所给 ν 为其他分量的），在界限内任一误差下成立"},
+    "k_iv_bound": {"en": "a quantity bounded errors enter by its bound-condition interval "
+                         "value ± (a + k·u): those errors (the item's bounded lines, named "
+                         "after its clause; the table's where none are named) at their "
+                         "bounds in their worst combination, added linearly, a, plus k·u of the other lines (ν stated is theirs), which "
+                         "holds at every error within the bounds",
+                   "zh": "受有界误差影响的量给出其界限条件区间 值 ± (a + k·u)：这些误差（该项的有界分量，列于"
+                         "其条款之后；未列出者为转台误差）取其界限按最不利组合线性相加为 a，加上其他分量的 k·u"
+                         "（所给 ν 为其他分量的），在界限内任一误差下成立"},
+    # a bounded line of a bound-condition item, by its budget symbol (details.bound_condition
+    # .a_lines); the rate table's where the item names none
+    "bound_line_e_table": {"en": "the rate table's error", "zh": "转台误差"},
+    "bound_line_e_TU": {"en": "the gyro's temperature error at the set point",
+                        "zh": "陀螺在设定点的温度误差"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},
@@ -235,6 +239,11 @@ LABELS: dict[str, dict[str, str]] = {
                          "JCGM 100 4.3.9）"},
     "k_iv_clauses": {"en": " ({c})", "zh": "（{c}）"},
     "u_c_word": {"en": "combined standard uncertainty", "zh": "合成标准不确定度"},
+    "u_c_beside_word": {"en": "combined standard uncertainty of the budget (the bounded lines as "
+                              "rectangular distributions): beside, not stated — it does not hold "
+                              "those errors at their bounds; the U row below is the statement",
+                        "zh": "预算的合成标准不确定度（有界分量按矩形分布计）：仅列于旁，不作声明——"
+                              "它对界限处的误差不成立；下行 U 为所作表述"},
     "src_own_A": {"en": "scatter of the item's own readings (Type A)",
                   "zh": "本项目读数的分散性（A类）"},
     "src_own_B": {"en": "bound from the specification's procedure (Type B)",
@@ -708,11 +717,11 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      r"standard uncertainty of E is certified; p = (\S+) %",
      "{1}：最大真值 |E_i| 的包含区间，各点延伸 k·u + b：u 为转台以外各分量的合成，b 为该点"
      "转台误差的界；不给出 E 的标准不确定度；p = {2} %"),
-    # a bound-condition interval's ends (gonio.report.item_dcc.BOUND_INTERVAL)
-    (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the table's errors at their "
-     r"bounds in their worst combination, a, plus k·u of the other lines; no standard "
+    # a bound-condition interval's ends (gonio.report.dcc.BOUND_INTERVAL)
+    (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the bounded errors \(the "
+     r"table's; the item's other bounded lines\) at their bounds in their worst combination, a, plus k·u of the other lines; no standard "
      r"uncertainty of the item is certified; p = (\S+) %",
-     "{1}：界限条件区间，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他分量的 k·u；"
+     "{1}：界限条件区间，值 ± (a + k·u)：有界误差（转台误差；该项的其他有界分量）取其界限的最不利组合 a，加其他分量的 k·u；"
      "不给出该项的标准不确定度；p = {2} %"),
     (r"(.+): intervalMin of each element's bound-condition interval, value ± \(a \+ k·u\): "
      r"the table's errors at their bounds in their worst combination, a, plus k·u of the "

@@ -27,13 +27,13 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (administrative_data, conformity_statements, interval_quantity,
-                              stated_p,
+from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, conformity_statements,
+                              interval_quantity, stated_p,
                               element, environment_conditions, influence_conditions,
                               measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
-from gonio.report.stated import item_nums
+from gonio.report.stated import item_nums, u_c_certified
 from gonio.result.statement import dsi_unit, p_text
 
 #: Output units of a sensor (counts of its digital output) → D-SI.
@@ -69,27 +69,6 @@ def compose_dsi(unit: str, extra=None) -> str:
                 if re.fullmatch(r"(?:/[^/^]+(?:\^\d+)?)*", rest):
                     return out
     raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", key="unit")
-
-
-def u_c_certified(it: dict) -> bool:
-    """Whether the certificate states item ``it``'s u_c, so that the DCC may state it as
-    the coverage interval's si:valueStandardMU: not for an item stated by a bound-condition
-    interval (``details.bound_condition``: value ± (a + k·u), the table's errors at their
-    bounds plus k·u of the other lines), whose certificate row states a, u of the other
-    lines, their ν and k — its u_c (the JCGM 100 budget) is kept in results.json, not
-    certified. The DCC writes such an item's interval ends without a standard uncertainty
-    (:func:`interval_quantity`).
-
-    >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
-    (False, True)
-    """
-    return not (it.get("details") or {}).get("bound_condition")
-
-
-#: what a bound-condition interval is, in the DCC's words
-BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the table's errors at their "
-                  "bounds in their worst combination, a, plus k·u of the other lines; no "
-                  "standard uncertainty of the item is certified")
 
 
 def _p(it: dict) -> float | None:

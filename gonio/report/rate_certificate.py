@@ -24,7 +24,7 @@ from gonio.report.header import (certificate_id, is_draft, conformity_section, o
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf_figures
-from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums
+from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums, u_c_certified
 from gonio.result.findings import stated_findings
 from gonio.result.statement import p_relation, unit_text
 from gonio.report.rate_content import item_conditions, rate_standards, spec_content
@@ -106,7 +106,8 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
     """One row per uncertainty component of every measured item (or of ``keys``), then its
     u_c, and U with k, ν_eff and p as the results table states them (JJF 1535 clause 8 k;
     JCGM 100 8). A component whose source the analysis left blank is named by its type
-    (:func:`component_source`)."""
+    (:func:`component_source`). The u_c row of an item stated by its bound condition
+    (:func:`gonio.report.stated.u_c_certified` false) is marked beside, not stated."""
     brows = []
     for key, it in res["items"].items():
         unc = it.get("uncertainty")
@@ -121,7 +122,8 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
                           _num(c["contribution"],
                                f"items.{key}.uncertainty.components.{j}.contribution", "sig3")])
         n = item_nums(it, f"items.{key}")
-        brows.append([it["clause"], "u_c", L["u_c_word"], "",
+        brows.append([it["clause"], "u_c",
+                      L["u_c_word" if u_c_certified(it) else "u_c_beside_word"], "",
                       _num(unc["u_c"], f"items.{key}.uncertainty.u_c", "sig3")])
         if n["U"] is not None:
             brows.append([it["clause"], "U", factors_cell(n, L), "", n["U"]])

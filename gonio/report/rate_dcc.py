@@ -45,12 +45,13 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (administrative_data, conformity_statements, environment_conditions,
-                              element, influence_conditions, measurement_result, new_document,
+from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, conformity_statements,
+                              element, environment_conditions, influence_conditions,
+                              interval_quantity, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display, labels
 from gonio.report.rate_content import item_conditions, rate_standards, spec_content
-from gonio.report.stated import item_nums
+from gonio.report.stated import item_nums, u_c_certified
 from gonio.result.statement import DSI_UNITS
 from gonio.specs import get
 from gonio.units import STANDARD_GRAVITY_M_S2
@@ -188,9 +189,11 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                 continue
             dsi, factor = dsi_unit(it["unit"], out_unit, src["file"], spec.dcc_units)
             n = item_nums(it, f"items.{key}", factor=factor)     # the certificate's rule
-            kw = {}
+            kw, bound = {}, None
             if n["U"] is not None and n["k"] is not None and n["p"] is not None:
                 kw = {"U": n["U"], "k": n["k"], "p": float(item_p(it))}
+            elif n["interval"] is not None and not u_c_certified(it) and n["p"] is not None:
+                bound = n["interval"]["ends"]         # its ends, no valueStandardMU
             elif n["interval"] is not None and n["interval"]["u"] and n["p"] is not None:
                 kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                       "p": float(item_p(it))}         # stated by its coverage interval
@@ -202,6 +205,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                                   f"results.json, written per m s⁻² (g_n = "
                                   f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv
                      else _below_zero_text(n), **kw)
+            if bound is not None:
+                interval_quantity(data, name, bound, dsi, float(item_p(it)), BOUND_INTERVAL)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

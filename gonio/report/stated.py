@@ -201,27 +201,90 @@ def interval_kind(item: dict) -> str | None:
     return "upper" if item.get("upper_bound") is not None else None
 
 
+def u_c_certified(it: dict) -> bool:
+    """Whether the certificate states the combined standard uncertainty u_c of ``it`` (a
+    results.json item, or a budget dict with its own ``u_c_certified`` flag), the one rule
+    every writer of a certificate, summary or DCC follows: not for a quantity stated by a
+    bound-condition interval — ``details.bound_condition``, or ``uncertainty.k_source``
+    "U = a + k·u" (value ± (a + k·u): the equipment's errors at their bounds, a, plus k·u of
+    the other lines), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
+    Its u_c (the JCGM 100 budget, the bounded lines as rectangular distributions) does not
+    hold those errors at their bounds: it is kept in results.json and shown in the budget
+    table marked "beside, not stated"; the DCC writes the interval's ends without an
+    si:valueStandardMU (:func:`gonio.report.dcc.interval_quantity`).
+
+    >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
+    (False, True)
+    >>> u_c_certified({"uncertainty": {"k_source": "U = a + k·u (bound condition)"}})
+    False
+    >>> u_c_certified({"u_c_certified": False}), u_c_certified({"u_c_certified": True})
+    (False, True)
+    """
+    if it.get("u_c_certified", True) is False:
+        return False
+    if (it.get("details") or {}).get("bound_condition"):
+        return False
+    ks = str((it.get("uncertainty") or {}).get("k_source") or "")
+    return not ks.startswith(K_SOURCE_BOUND_PREFIX)
+
+
+def bounded_lines_text(it: dict, L: dict) -> str:
+    """The bounded lines of a bound-condition item (results.json
+    ``details.bound_condition.a_lines``, its budget symbols) in L's words, as the legend
+    names them beside the item's clause; "" where the item names none (its clause alone).
+    A symbol with no words stays as written.
+
+    >>> from gonio.report.i18n import labels
+    >>> bounded_lines_text({"details": {"bound_condition": {"a_lines": {"e_table": 1e-3,
+    ...     "e_TU": 5e-4}}}}, labels("en"))
+    "the rate table's error and the gyro's temperature error at the set point"
+    >>> bounded_lines_text({"details": {"bound_condition": {"a_lines": {"e_table": 1e-3}}}},
+    ...                    labels("zh")), bounded_lines_text({}, labels("en"))
+    ('转台误差', '')
+    """
+    bc = (it.get("details") or {}).get("bound_condition") or {}
+    words = [L.get(f"bound_line_{s}", s)
+             for s in (bc.get("a_lines") if isinstance(bc, dict) else None) or ()]
+    if L["k_iv_head"].startswith("以"):
+        return "、".join(words)
+    return " and ".join([", ".join(words[:-1]), words[-1]] if len(words) > 2 else words)
+
+
 def interval_legend(items: dict, L: dict) -> str:
     """The legend under a results table saying how each item stated by an interval is stated:
-    one part per kind present (:func:`interval_kind`), each with the clauses of its items;
-    "" where no item is stated by an interval. A pure function of the stored items."""
+    one part per kind present (:func:`interval_kind`), each with the clauses of its items
+    (a bound-condition item's with its bounded lines, :func:`bounded_lines_text`); "" where
+    no item is stated by an interval. A pure function of the stored items."""
+    zh = L["k_iv_head"].startswith("以")
+
+    def conv(c: str) -> str:  # "7.3 (3.3)" in Chinese text: full-width brackets
+        return c.replace(" (", "（").replace("(", "（").replace(")", "）") if zh else c
+
     kinds: dict[str, list[str]] = {}
+    lines_of: dict[str, str] = {}
     for it in items.values():
         kind = interval_kind(it) if isinstance(it, dict) else None
-        clause = str(it.get("clause") or "")
+        clause = conv(str(it.get("clause") or ""))
+        if kind == "bound" and clause:
+            lines_of.setdefault(clause, bounded_lines_text(it, L))
         if kind and clause not in kinds.setdefault(kind, []):     # each clause once
             kinds[kind].append(clause)
     if not kinds:
         return ""
-    zh = L["k_iv_head"].startswith("以")
-    sep = "；" if zh else "; "
-    if zh:                  # "7.3 (3.3)" in Chinese text: full-width brackets
-        kinds = {k: [c.replace(" (", "（").replace("(", "（").replace(")", "）") for c in v]
-                 for k, v in kinds.items()}
-    parts = [L[f"k_iv_{k}"] + (L["k_iv_clauses"].format(c=", ".join(c for c in kinds[k] if c))
-                               if any(kinds[k]) else "")
+
+    def clauses(k: str) -> str:   # the bound's clauses grouped by their bounded lines
+        cs = [c for c in kinds[k] if c]
+        if k != "bound" or not any(lines_of.get(c) for c in cs):
+            return ", ".join(cs)
+        groups: dict[str, list[str]] = {}
+        for c in cs:
+            groups.setdefault(lines_of.get(c, ""), []).append(c)
+        return ("；" if zh else "; ").join(", ".join(g) + (("：" if zh else ": ") + w if w else "")
+                                          for w, g in groups.items())
+
+    parts = [L[f"k_iv_{k}"] + (L["k_iv_clauses"].format(c=clauses(k)) if any(kinds[k]) else "")
              for k in INTERVAL_KINDS if k in kinds]
-    return L["k_iv_head"].format(kinds=sep.join(parts))
+    return L["k_iv_head"].format(kinds=("；" if zh else "; ").join(parts))
 
 
 def declaration_parts(c, t: dict) -> tuple[str, str]:

@@ -102,4 +102,18 @@ COMMON_PHRASES_ZH = (
      "{1} 第 {2} 次运行（全部）在读数中缺失"),
     (r"(\w+) run (\S+): the planned (\w+) = (.+) is missing from the readings",
      "{1} 第 {2} 次运行：计划的 {3} = {4} 在读数中缺失"),
+    # the rate-table-u-unstated finding (gonio.specs._rate_family.screening), whose it is
+    (r"the laboratory's assumption taken from JJF 1535 Table 2 \(IEC 62047-20 states no "
+     r"requirement on the rate table's accuracy\)",
+     "实验室依 JJF 1535 表2 所作的假定（IEC 62047-20 对转台准确度无要求）"),
+    (r"JJF 1535 Table 2's rate accuracy \(the table is taken to conform to it\)",
+     "JJF 1535 表2 的速率准确度（认定转台符合该要求）"),
+    (r"the rate table's uncertainty is not stated \(no # rate_table_u_rel\): budgeted as a "
+     r"table within ±(\S+) % of the set rate, (.+?): the items stated by the bound condition "
+     r"add the table at ±(\S+) % linearly \(U = a \+ k·u\), the others budget it as a "
+     r"rectangular line \(u = (\S+) relative\); a table outside it makes the stated U too "
+     r"small — state rate_table_u_rel from the table's calibration certificate",
+     "未给出速率转台的不确定度（无 # rate_table_u_rel）：按转台误差在设定速率的 ±{1} % 以内计入"
+     "（{2}）：以界限条件表述的项目将转台误差按 ±{3} % 线性相加（U = a + k·u），其余项目按矩形分布"
+     "计入（相对 u = {4}）；转台超出此界限时所给 U 偏小——请按转台校准证书给出 rate_table_u_rel"),
 )

@@ -447,8 +447,9 @@ RATE_TABLE_UNSTATED_CODE = "rate-table-u-unstated"
 def rate_table_unstated(metadata: dict, file, assumed_by: str) -> list[Finding]:
     """A flagged finding where the readings state no ``rate_table_u_rel`` (the rate table's
     certificate u): the budgets then take the table to conform to JJF 1535 Table 2's rate
-    accuracy 0.05 % (one rectangular line, :func:`.rate_records.rate_table_line`), an
-    assumption the certificate states, naming whose it is (``assumed_by``: JJF 1535's
+    accuracy 0.05 % (added linearly at that bound in the items stated by the bound
+    condition, :func:`.rate_records.table_bound_statement`; one rectangular line in the
+    others, :func:`.rate_records.rate_table_line`), an assumption the certificate states, naming whose it is (``assumed_by``: JJF 1535's
     requirement, or the laboratory's own where the specification states none); ``[]``
     where the readings state it.
 
@@ -466,8 +467,10 @@ def rate_table_unstated(metadata: dict, file, assumed_by: str) -> list[Finding]:
     return [Finding(RATE_TABLE_UNSTATED_CODE,
                     f"the rate table's uncertainty is not stated (no # rate_table_u_rel): "
                     f"budgeted as a table within ±{100 * half:g} % of the set rate, "
-                    f"{assumed_by}, as a rectangular bound (u = {half / math.sqrt(3):.3g} "
-                    "relative); a table outside it makes the stated U too small — state "
+                    f"{assumed_by}: the items stated by the bound condition add the table "
+                    f"at ±{100 * half:g} % linearly (U = a + k·u), the others budget it as a "
+                    f"rectangular line (u = {half / math.sqrt(3):.3g} relative); a table "
+                    "outside it makes the stated U too small — state "
                     "rate_table_u_rel from the table's calibration certificate",
                     "flagged", file=file, column="rate_table_u_rel",
                     rule="the rate table's u stated from its certificate")]

@@ -111,6 +111,9 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         chamber_fluctuation_period_s=metadata_number(md, "chamber_fluctuation_period_s", 0.0,
                                                      rd.path) or None)
     items = calibrate_items(ctx, _items, monte_carlo_trials)
+    # a_BASE without 5.1.3.4's T_c,SF: its chamber-deviation term is not bounded, said so
+    unbounded = _items.chamber_effect_finding(items, _items.gyro_temperature_bound_c(ctx))
+    findings = list(findings) + ([unbounded] if unbounded is not None else [])
     return Result(KEY, TITLE_EN, items, dict(md), source_info(rd),
                   list(READINGS_TAKEN),
                   extra={"supply_correction_eq18": {

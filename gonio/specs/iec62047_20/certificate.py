@@ -138,6 +138,15 @@ READINGS_ZH = {
 
 #: Budget sources and reasons in Chinese (see gonio.report.i18n.phrase_zh).
 PHRASES_ZH = COMMON_PHRASES_ZH + (
+    # the chamber-effect-unbounded finding (gonio.specs.iec62047_20.items.chamber_effect_finding)
+    (r"the chamber-deviation effect on a_BASE is not bounded: the scale-factor temperature "
+     r"coefficient of 5\.1\.3\.4 is not measured \((.+)\), so U\(a_BASE\) and U of 5\.1\.3\.2 "
+     r"hold no term for the gyro's temperature error at T_BASE \(± (\S+) °C: the chamber's "
+     r"deviation and its place in the volume\) — measure 5\.1\.3\.4 or state the "
+     r"coefficient's bound",
+     "温箱偏差对 a_BASE 的影响未给出界限：5.1.3.4 的标度因数温度系数未测得（{1}），故 U(a_BASE) 与 "
+     "5.1.3.2 的 U 不含陀螺在 T_BASE 处温度误差（± {2} °C：温箱偏差及其在容积内的位置）的分量——"
+     "请测量 5.1.3.4 或给出该系数的界限"),
     (r"half range of (\d+) records; interval from the distribution of the range of normal "
      r"values \(Tippett\)", "{1} 次记录的半极差；区间按正态值极差的分布求得"),
     (r"alignment of the input axis to the plane perpendicular to the rotation axis \(table axis "

@@ -242,6 +242,54 @@ def sf_tc_rel(ctx: Context) -> float:
         return 0.0          # runs the 5.1.3.4 item itself refuses: no coefficient to use
 
 
+def sf_tc_rel_bound(ctx: Context, a_base: float) -> tuple[float | None, str]:
+    """The bound of |T_c,SF/a| (1/°C) the bound condition takes for the gyro's temperature
+    error at T_BASE: |T_c,SF/a_BASE| + U(T_c,SF/a_BASE) of 5.1.3.4's statement
+    (:func:`sf_temperature`, its 95 % interval's far end: the estimate alone is no bound),
+    and ""; (None, why) when 5.1.3.4 is not measured (no runs, or the item refuses them) —
+    the chamber-deviation effect on a_BASE is then not bounded, which the calibration
+    states as a finding (:data:`CHAMBER_EFFECT_UNBOUNDED_CODE`), never a silent 0.
+    ``a_base``: the 5.1.3.1 slope, which 5.1.3.4 needs to be computed at all."""
+    try:
+        it = sf_temperature(ctx if ctx.a_base is not None else replace(ctx, a_base=a_base))
+    except (GonioError, ValueError, IndexError, KeyError) as e:
+        return None, str(e)
+    if not it.measured or it.value is None or not math.isfinite(it.value):
+        return None, it.reason or "no finite value"
+    unc = it.uncertainty
+    if unc is not None and unc.U is not None:
+        reach = abs(it.value) + float(unc.U)
+    elif unc is not None and unc.interval is not None:
+        reach = max(abs(float(e)) for e in unc.interval)
+    else:
+        return None, "5.1.3.4 states no uncertainty"
+    return reach / 100.0, ""          # the item is 100·T_c,SF/a_BASE in %/°C
+
+
+#: The finding of an IEC calibration whose a_BASE has no bound for the chamber's deviation.
+CHAMBER_EFFECT_UNBOUNDED_CODE = "chamber-effect-unbounded"
+
+
+def chamber_effect_finding(items: dict, chamber_bound_c: float):
+    """A flagged finding where a_BASE (5.1.3.1) is measured but 5.1.3.4's T_c,SF is not
+    (:func:`sf_tc_rel_bound` None): U(a_BASE) and U(5.1.3.2) then hold no term for the
+    gyro's temperature error at T_BASE (the chamber's deviation and the place in its
+    volume, ± ``chamber_bound_c``); None otherwise."""
+    from gonio.result.findings import Finding
+
+    sf, tc = items.get("scale_factor"), items.get("sf_temperature_coefficient")
+    if sf is None or not sf.measured or tc is None or tc.measured:
+        return None
+    return Finding(CHAMBER_EFFECT_UNBOUNDED_CODE,
+                   f"the chamber-deviation effect on a_BASE is not bounded: the scale-factor "
+                   f"temperature coefficient of 5.1.3.4 is not measured ({tc.reason}), so "
+                   f"U(a_BASE) and U of 5.1.3.2 hold no term for the gyro's temperature "
+                   f"error at T_BASE (± {chamber_bound_c:g} °C: the chamber's deviation and "
+                   f"its place in the volume) — measure 5.1.3.4 or state the coefficient's "
+                   f"bound", "flagged", clause="5.1.3.1",
+                   rule="a_BASE's chamber-deviation effect bounded by 5.1.3.4's T_c,SF")
+
+
 def scale_factor(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.1 eqs (1), (2): a_BASE, least squares over the 2n + 1 points (rest
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
@@ -264,12 +312,17 @@ def scale_factor(ctx: Context) -> Item:
 def _bound_statement(ctx: Context, u, value: float):
     """The statement of an item with :func:`_u_rel_sf`'s budget: where the readings state no
     certificate u for the rate table, the table's bound (e_table) and the gyro's
-    temperature error at T_BASE (e_TU), both bounded and allowed at once, added linearly
+    temperature error at T_BASE (e_TU: the chamber's bound × :func:`sf_tc_rel_bound`,
+    |T_c,SF/a| + its U; 0 where 5.1.3.4 is not measured, which the calibration states as a
+    finding, :func:`chamber_effect_finding`), both bounded and allowed at once, added linearly
     (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`); otherwise the
     GUM budget's U = k·u_c."""
+    if ctx.rate_table_u_rel is not None:
+        return u, {}
+    tc_bound, _ = sf_tc_rel_bound(ctx, _sf_runs(ctx, "scale_factor")[0]["a"])
     return table_bound_statement(u, value, ctx.rate_table_u_rel, {
         "e_table": TABLE2_RATE_ACCURACY_REL,
-        "e_TU": gyro_temperature_bound_c(ctx) * abs(sf_tc_rel(ctx))})
+        "e_TU": gyro_temperature_bound_c(ctx) * (tc_bound or 0.0)})
 
 
 def initial_sf_variation(ctx: Context) -> Item:

@@ -100,8 +100,11 @@ ANNEX_A_COVERAGE: float = 0.95
 def e_u_c_certified(unc: dict) -> bool:
     """Whether E's budget u_c (results.json ``extra.uncertainty.u_c_arcsec``) is stated:
     not where the per-point U carries the table's bound (``u_c_certified`` False,
-    :func:`gonio.specs.ogam_draft.budget.e_point_statement`), whose u_c is kept beside."""
-    return unc.get("u_c_certified", True) is not False
+    :func:`gonio.specs.ogam_draft.budget.e_point_statement`), whose u_c is kept beside
+    (the shared rule, :func:`gonio.report.stated.u_c_certified`)."""
+    from gonio.report.stated import u_c_certified
+
+    return u_c_certified(unc)
 
 
 def item_uncertainty(res: dict, name: str) -> dict | None:

@@ -1,0 +1,197 @@
+"""Rate items stated by their bound condition (a readings file with no ``# rate_table_u_rel``:
+JJF 1535 7.2.1 K, IEC 62047-20 5.1.3.1 a_BASE and 5.1.3.2) certify no combined standard
+uncertainty, the one rule of every writer (gonio.report.stated.u_c_certified):
+
+- the DCC states their interval's ends with no si:valueStandardMU (the budget's u_c, whose
+  table line is rectangular, does not hold the table at its bound); items stated otherwise
+  keep theirs;
+- the certificate's budget table marks their u_c row "beside, not stated" (en, zh);
+- the legend names each item's bounded lines from ``details.bound_condition.a_lines``
+  (JJF K: the table's alone, no chamber term; IEC: the table's and the gyro's temperature);
+- the rate-table finding says the table is added linearly in those items;
+- IEC: the gyro's temperature line e_TU is the chamber's bound × (|T_c,SF/a| + U) of
+  5.1.3.4's own statement (recomputed here from results.json's 5.1.3.4 item and the
+  readings' chamber metadata), and without 5.1.3.4 a flagged finding says the chamber's
+  effect on a_BASE is not bounded (never a silent 0).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from gonio.report.dcc import DCC_NS, SI_NS
+
+PINS = Path(__file__).resolve().parent / "data" / "pins"
+NS = {"dcc": DCC_NS, "si": SI_NS}
+#: the items into which the rate table's relative error enters (JJF 7.2.1, IEC 5.1.3.1, 5.1.3.2)
+BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"},
+               "iec62047-20": {"scale_factor", "initial_sf_variation"}}
+
+
+def gonio(*args, cwd: Path) -> None:
+    r = subprocess.run([sys.executable, "-m", "gonio", *map(str, args)], cwd=cwd,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+def calibrated(root: Path, spec: str, drop_test: str | None = None) -> dict:
+    proto = PINS / f"{spec}-small.toml"
+    gonio("simulate", "--spec", spec, "--protocol", proto, "--seed", 4, "--out", root / "sim",
+          cwd=root)
+    text = (root / "sim" / "readings.csv").read_text(encoding="utf-8")
+    assert re.search(r"(?m)^# rate_table_u_rel:", text)
+    text = re.sub(r"(?m)^# rate_table_u_rel:.*\n", "", text)
+    if drop_test:
+        text = re.sub(rf"(?m)^{drop_test},.*\n", "", text)
+    (root / "r.csv").write_text(text, encoding="utf-8")
+    gonio("calibrate", root / "r.csv", "--protocol", proto, "--dcc", "--out", root / "cal",
+          cwd=root)
+    out = root / "cal"
+    return {"spec": spec, "text": text,
+            "res": json.loads((out / "results.json").read_text(encoding="utf-8")),
+            "html": (out / "certificate.html").read_text(encoding="utf-8"),
+            "summary": (out / "summary.txt").read_text(encoding="utf-8"),
+            "dcc": etree.parse(str(out / "certificate.dcc.xml"))}
+
+
+_RUNS: dict = {}
+
+
+def _run(tmp_path_factory, spec: str) -> dict:
+    """One calibration per specification for the module (the tests only read it)."""
+    if spec not in _RUNS:
+        _RUNS[spec] = calibrated(tmp_path_factory.mktemp(spec), spec)
+    return _RUNS[spec]
+
+
+@pytest.fixture(scope="module", params=list(BOUND_ITEMS))
+def cal(request, tmp_path_factory):
+    return _run(tmp_path_factory, request.param)
+
+
+def _plain(html: str) -> str:
+    import html as html_lib
+
+    return html_lib.unescape(re.sub(r"<[^>]+>", " ", html))
+
+
+def test_the_table_enters_those_items_by_their_bound(cal):
+    res = cal["res"]
+    bound = {k for k, it in res["items"].items()
+             if (it.get("details") or {}).get("bound_condition")}
+    assert bound == BOUND_ITEMS[cal["spec"]]
+
+
+def test_dcc_states_no_standard_uncertainty_for_a_bound_item(cal):
+    res, tree = cal["res"], cal["dcc"]
+    for key, it in res["items"].items():
+        r = tree.find(f".//dcc:result[@id='result-{key}']", NS)
+        if r is None or not it["measured"]:
+            continue
+        mu = r.findall(".//si:valueStandardMU", NS)
+        if key in BOUND_ITEMS[cal["spec"]]:
+            assert not mu, key
+            vals = r.findall(".//si:realListXMLList/si:valueXMLList", NS)
+            assert len(vals) == 1, key
+            lo, hi = (float(v) for v in vals[0].text.split())
+            jlo, jhi = it["uncertainty"]["interval"]
+            # the printed ends hold the interval (rounded outward) within a rounding step
+            assert lo <= jlo and hi >= jhi and (hi - lo) < 1.05 * (jhi - jlo), (key, lo, hi)
+            assert "no standard uncertainty of the item is certified" in etree.tostring(
+                r, encoding="unicode")
+        elif it["uncertainty"] and it["uncertainty"].get("k") is not None and \
+                it.get("upper_bound") is None:
+            # a GUM item stated by value ± U keeps its expanded U (nothing withheld)
+            assert r.find(".//si:expandedMU", NS) is not None, key
+
+
+def test_budget_marks_the_u_c_of_a_bound_item_not_stated(cal):
+    from gonio.report.i18n import labels
+    from gonio.report.rate_certificate import budget_rows
+
+    res = cal["res"]
+    bound_clauses = {res["items"][k]["clause"] for k in BOUND_ITEMS[cal["spec"]]}
+    for lang, beside, plain in (("en", "beside, not stated", "combined standard uncertainty"),
+                                ("zh", "不作声明", "合成标准不确定度")):
+        rows = [r for r in budget_rows(res, labels(lang)) if r[1] == "u_c"]
+        for r in rows:
+            if r[0] in bound_clauses:
+                assert beside in r[2], (lang, r)
+            else:
+                assert r[2] == plain, (lang, r)
+        assert {r[0] for r in rows if beside in r[2]} == bound_clauses, lang
+    page = _plain(cal["html"])
+    assert page.count("beside, not stated") == len(BOUND_ITEMS[cal["spec"]])
+
+
+def test_legend_names_each_items_bounded_lines(cal):
+    from gonio.report.i18n import labels
+    from gonio.report.stated import interval_legend
+
+    res = cal["res"]
+    page = re.sub(r"\s+", " ", _plain(cal["html"]))
+    zh = interval_legend(res["items"], labels("zh"))
+    for key in BOUND_ITEMS[cal["spec"]]:
+        lines = set(res["items"][key]["details"]["bound_condition"]["a_lines"])
+        assert lines == ({"e_table"} if cal["spec"] == "jjf1535-2015" else {"e_table", "e_TU"})
+    if cal["spec"] == "jjf1535-2015":
+        assert "(7.2.1: the rate table's error)" in page
+        assert "（7.2.1：转台误差）" in zh
+    else:
+        assert ("(5.1.3.1, 5.1.3.2: the rate table's error and the gyro's temperature error "
+                "at the set point)") in page
+        assert "（5.1.3.1, 5.1.3.2：转台误差、陀螺在设定点的温度误差）" in zh
+    assert "chamber's temperature error" not in page and "温箱温度误差）给出" not in zh
+
+
+def test_rate_table_finding_says_the_bound_is_added_linearly(cal):
+    msg, = [f["message"] for f in cal["res"]["findings"] if f["code"] == "rate-table-u-unstated"]
+    assert "linearly" in msg and "as a rectangular bound" not in msg
+    assert "linearly" in cal["summary"]
+
+
+def _chamber_bound_c(text: str) -> float:
+    md = dict(re.findall(r"(?m)^# (\w+): (.*)$", text))
+    return float(md["chamber_deviation_bound_c"]) + float(md["chamber_uniformity_c"]) / 2
+
+
+def test_iec_temperature_line_takes_the_coefficients_far_end(tmp_path_factory):
+    c = _run(tmp_path_factory, "iec62047-20")
+    items = c["res"]["items"]
+    tc = items["sf_temperature_coefficient"]
+    assert tc["measured"]
+    reach = (abs(tc["value"]) + tc["uncertainty"]["U"]) / 100          # %/°C → 1/°C
+    for key in BOUND_ITEMS["iec62047-20"]:
+        it = items[key]
+        row, = [r for r in it["uncertainty"]["components"] if r["symbol"] == "e_TU"]
+        want = abs(row["c"]) * _chamber_bound_c(c["text"]) * reach
+        got = it["details"]["bound_condition"]["a_lines"]["e_TU"]
+        assert got == pytest.approx(want, rel=1e-9), key
+        # the estimate alone falls short of it
+        assert got > abs(row["c"]) * _chamber_bound_c(c["text"]) * abs(tc["value"]) / 100
+    assert not [f for f in c["res"]["findings"] if f["code"] == "chamber-effect-unbounded"]
+
+
+def test_iec_without_its_temperature_coefficient_says_the_chamber_is_unbounded(tmp_path):
+    from gonio.report.i18n import finding_text, labels
+    from gonio.specs.iec62047_20.certificate import PHRASES_ZH
+
+    c = calibrated(tmp_path, "iec62047-20", drop_test="sf_temperature")
+    res = c["res"]
+    assert not res["items"]["sf_temperature_coefficient"]["measured"]
+    assert res["items"]["scale_factor"]["measured"]
+    found = [f for f in res["findings"] if f["code"] == "chamber-effect-unbounded"]
+    assert len(found) == 1 and found[0]["action"] == "flagged", res["findings"]
+    msg = found[0]["message"]
+    assert "not bounded" in msg and "5.1.3.4" in msg and f"{_chamber_bound_c(c['text']):g} °C" in msg
+    assert "chamber-deviation effect on a_BASE is not bounded" in _plain(c["html"])
+    assert "chamber-deviation effect on a_BASE is not bounded" in c["summary"]
+    zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
+    assert "温箱偏差对 a_BASE 的影响未给出界限" in zh and "chamber" not in zh
