@@ -39,11 +39,11 @@ def own_text(text: str, unmark: bool = True) -> str:
 
 def unmarked(text: str) -> str:
     """``text`` as a laboratory's own recording of the same values, without the bench's
-    watermark (gonio.formats.watermark): in a rate or triad file the last written digit of
-    every other measured cell (by an unkeyed CRC of its line) moved by one (9 → 8, else up),
-    readings of the same values at the same resolution with parities of their own; in an
-    optical file every time written at the millisecond (a laboratory's clock), the counts
-    as they are."""
+    watermark (gonio.formats.watermark): every time written at the millisecond (a
+    laboratory's clock), the measured values as they are; in a file marked in its measured
+    columns (no times) the last written digit of every other measured cell (by an unkeyed
+    CRC of its line) moved by one (9 → 8, else up), readings of the same values at the same
+    resolution with parities of their own."""
     import zlib
 
     from gonio.formats.watermark import TIME_COLUMN, marked_columns

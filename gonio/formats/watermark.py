@@ -15,24 +15,27 @@ What it is
     points …), not of its position nor of how its numbers are spelt. The virtual bench
     writes every marked value ``v`` so that the integer ``q = v·10ᵈ`` (``d`` the column's
     marked decimal) has the parity ``b``: where the bench's value does not, ``q`` is moved by
-    one (up or down by a second keyed bit;
+    one (in an optical file up or down by a second keyed bit, in a rate or triad file up;
     up from zero). The parity is a property of the value, not of
-    its text: a re-save that keeps the value (``2501.70`` → ``2501.7``) keeps the mark.
+    its text: a re-save that keeps the value (``12.050`` → ``12.05``) keeps the mark.
 Which cells
-    - The optical draft's readings and streams (a ``gyro_counts`` or ``gyro_deg`` column):
-      ``time_s`` only, at :data:`TIME_DECIMALS` = 9 (one nanosecond). No measured value
-      moves: the counts and angles are written as the bench made them; a reading's time
-      moves by at most 1 ns (a 60 °/s rotation turns 0.2 µ″ in it; the Earth rate 4·10⁻⁹ ″),
-      far below the bench's own timing (the counter is read at the sample clock).
-    - The rate specifications' ``output`` and the triad's ``out_*``/``sd_*``: at the
-      column's decimals ``d`` (the most decimals a value of the column is written with,
-      at most ``15 −`` the digits of its largest whole part, so that every value survives
-      a re-save at 15 significant digits): each value is written with ``d`` decimals (a
-      value written with fewer is padded, so it moves by one unit of the column's ``d``-th
-      decimal, never of its own last digit), one step of the rate bench's output
-      resolution, 10⁻¹¹–10⁻¹³ of the triad's full-precision values. A column whose values
-      have no decimals at all (an exact integer or 0.0 column) is not marked: one unit
-      would then be a whole one.
+    ``time_s`` only, at :data:`TIME_DECIMALS` = 9 (one nanosecond), in every file that has a
+    ``time_s`` column: the optical draft's readings and streams (a ``gyro_counts`` or
+    ``gyro_deg`` column), the rate specifications' readings and the triad's readings and
+    thermal readings. No measured value moves: the counts, angles, outputs and standard
+    deviations are written as the bench made them, so the mark changes no certified number
+    (tests/test_virtual_mark_numbers.py); a reading's time moves by at most 1 ns (a 60 °/s
+    rotation turns 0.2 µ″ in it; the Earth rate 4·10⁻⁹ ″; 10⁻⁹ s of a rate programme's
+    one-second clock), far below the bench's own timing. A rate or triad time moves only
+    later, so that no reading leaves the time window a procedure selects it by from below.
+    A file without a ``time_s`` column is marked in its measured columns :data:`COLUMNS`
+    (the rate specifications' ``output``, the triad's ``out_*``/``sd_*``) at the column's
+    decimals ``d`` (the most decimals a value of the column is written with, at most
+    ``15 −`` the digits of its largest whole part), each value written with ``d``
+    decimals, moved by at most one unit of the ``d``-th; a column whose values have no
+    decimals at all is not marked. Until 2026-12-02 the bench marked its rate and triad
+    files so, which moved the rate outputs by one step of their resolution and the certified
+    numbers by up to one printed digit; such files are recognised by their metadata only.
 How it is detected
     :func:`detect` reads a CSV file line by line, or a Parquet stream batch by batch, and
     stops at :data:`MAX_CELLS` distinct cells (at most :data:`MAX_ROWS` rows): a file's size
@@ -72,9 +75,10 @@ import numpy as np
 #: The key (a constant of gonio: the watermark marks provenance, it does not seal it).
 KEY = b"gonio virtual bench readings watermark v2"
 #: The measured columns the watermark is written into and read from in a rate or triad file
-#: (the rate specifications' output, the triad's outputs and their standard deviations).
+#: without a ``time_s`` column (the rate specifications' output, the triad's outputs and
+#: their standard deviations); a file with times is marked in them alone.
 COLUMNS: tuple[str, ...] = ("output", "out_x", "out_y", "out_z", "sd_x", "sd_y", "sd_z")
-#: The optical draft's measured columns: a file holding one is marked in its ``time_s``.
+#: The optical draft's measured columns: a file holding one has its times marked up or down.
 OPTICAL_COLUMNS: tuple[str, ...] = ("gyro_counts", "gyro_deg")
 #: The optical readings' and streams' marked column and its decimal (1 ns).
 TIME_COLUMN = "time_s"
@@ -145,7 +149,7 @@ def _q(v: Decimal, d: int) -> int:
 def marked_columns(header) -> dict[int, str]:
     """{index: name} of the marked columns of a header (module docstring, Which cells)."""
     names = [str(h).strip().lstrip("\ufeff") for h in header]
-    if any(n in OPTICAL_COLUMNS for n in names):
+    if TIME_COLUMN in names:            # every file with times: the mark moves no value
         return {j: n for j, n in enumerate(names) if n == TIME_COLUMN}
     return {j: n for j, n in enumerate(names) if n in COLUMNS}
 
@@ -203,6 +207,7 @@ def mark_text(text: str) -> str:
     cols = marked_columns(header)
     if not cols:
         return text
+    optical = any(n in OPTICAL_COLUMNS for n in header)
     rows = [(i, c) for i, c in rows if len(c) == len(header) and '"' not in lines[i]]
     decimals = {j: column_decimals(name, [_value(c[j]) for _, c in rows])
                 for j, name in cols.items()}
@@ -216,8 +221,9 @@ def mark_text(text: str) -> str:
                 continue
             q = _q(v, d)
             bit, up = cell_bit(name, ctx)
-            if q % 2 != bit:
-                q += 1 if up or q == 0 else -1      # a zero (a first time) stays ≥ 0
+            if q % 2 != bit:        # a zero (a first time) stays >= 0; a rate or triad
+                # time only later (a record's first time stays inside its segment)
+                q += 1 if up or q == 0 or not optical else -1
             if name != TIME_COLUMN or Decimal(q).scaleb(-d) != Decimal(cells[j].strip()):
                 cells[j] = _fixed(q, d)
         end = lines[i][len(lines[i].rstrip("\r\n")):]
