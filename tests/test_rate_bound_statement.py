@@ -3,13 +3,14 @@
 its Table 2 bound and the other bounded line (the gyro's temperature error at T_BASE, e_TU)
 can sit at their bounds at once with one sign, so the statement adds them linearly,
 U = a + k·u_rest (the bound condition), not k·u_c of their quadrature; a laboratory that
-states ``rate_table_u_rel`` keeps the GUM statement.
+states ``rate_table_u_rel`` has the table's line as a normal u (JJF K then keeps the GUM
+statement; IEC a_BASE and 5.1.3.2 still add e_TU at its bound).
 
 The checks are closed forms computed here from the standard's Table 2 (0.05 %, read off the
 standard, not gonio's constant), the measurement model evaluated exactly at both bounds with
 the same sign, Student's t from scipy and the Welch–Satterthwaite formula written out.
 Mutation (the quadrature back: ``table_bound_statement`` returning the GUM budget) fails
-every test here but the stated-u one."""
+every test here but JJF's stated-u one."""
 
 from __future__ import annotations
 
@@ -135,21 +136,49 @@ def test_jjf_k_statement_adds_the_table_bound(jjf):
     assert u.interval[0] <= t <= u.interval[1]
 
 
-@pytest.mark.parametrize("which", ["iec", "jjf"])
-def test_a_stated_certificate_u_keeps_the_gum_statement(request, which):
-    """A laboratory stating ``rate_table_u_rel`` (its certificate's u): the table's line is
-    normal with that u and the item keeps U = k·u_c, k = t_95(ν_eff) (no bound condition)."""
-    spec, proto, readings, _, _ = request.getfixturevalue(which)
+def test_a_stated_certificate_u_keeps_the_gum_statement(jjf):
+    """JJF K with ``rate_table_u_rel`` stated (its certificate's u): the table's line is
+    normal with that u, the budget holds no other bound, and K keeps U = k·u_c,
+    k = t_95(ν_eff) (no bound condition)."""
+    spec, proto, readings, _, _ = jjf
     res = _calibrate(spec, proto, readings, rate_table_u_rel="0.00025")
-    keys = ("scale_factor", "initial_sf_variation") if which == "iec" else ("scale_factor",)
-    for key in keys:
-        it = res.items[key]
-        u = it.uncertainty
-        assert _rows(it)["e_table"]["u"] == pytest.approx(2.5e-4, rel=1e-12)
-        assert u.k is not None and u.interval is None and "bound_condition" not in it.details
-        assert u.k_source == "welch-satterthwaite"
-        assert u.U == pytest.approx(u.k * u.u_c, rel=1e-12)
-        assert u.k == pytest.approx(_t95(u.nu_eff), rel=1e-12)
+    it = res.items["scale_factor"]
+    u = it.uncertainty
+    assert _rows(it)["e_table"]["u"] == pytest.approx(2.5e-4, rel=1e-12)
+    assert u.k is not None and u.interval is None and "bound_condition" not in it.details
+    assert u.k_source == "welch-satterthwaite"
+    assert u.U == pytest.approx(u.k * u.u_c, rel=1e-12)
+    assert u.k == pytest.approx(_t95(u.nu_eff), rel=1e-12)
+
+
+@pytest.mark.parametrize("key", ["scale_factor", "initial_sf_variation"])
+def test_iec_stated_table_u_still_bounds_the_chamber(iec, key):
+    """IEC a_BASE and 5.1.3.2 with ``rate_table_u_rel`` stated: the table's line is normal
+    with that u (among the rest), but the gyro's temperature error at T_BASE is still a
+    bound the procedure allows (the chamber anywhere within its deviation), so it is added
+    linearly: U = shift(e_TU at its bound) + t_95(ν_rest)·u_rest, u_rest with the table's
+    line. The quadrature (e_TU rectangular) covers as little as 84 % with the chamber at
+    its bound; mutation (a stated u returning the GUM budget) fails here."""
+    spec, proto, readings, truth, _ = iec
+    res = _calibrate(spec, proto, readings, rate_table_u_rel="0.00025")
+    it = res.items[key]
+    rows = _rows(it)
+    assert rows["e_table"]["u"] == pytest.approx(2.5e-4, rel=1e-12)
+    md = readings.metadata
+    bound_c = float(md["chamber_deviation_bound_c"]) + float(md["chamber_uniformity_c"]) / 2
+    tc = res.items["sf_temperature_coefficient"]
+    h_tu = bound_c * (abs(tc.value) + tc.U) / 100
+    a_base = res.items["scale_factor"].value
+    shifted = a_base * (1 + h_tu)
+    shift = abs(shifted - a_base) if key == "scale_factor" else \
+        100 * abs(shifted - a_base) / res.items["initial_sf_variation"].details["a_TYP"]
+    u_rest, nu_rest = _rest(it, ("e_TU",))
+    u = it.uncertainty
+    assert u.k is None and u.k_source.startswith(BOUND_PREFIX)
+    assert sorted(it.details["bound_condition"]["a_lines"]) == ["e_TU"]
+    assert u.U == pytest.approx(shift + _t95(nu_rest) * u_rest, rel=1e-3)
+    assert u.U > it.details["bound_condition"]["U_quadrature"]
+    assert u.nu_eff == pytest.approx(nu_rest, rel=1e-9)
 
 
 def test_the_certificate_states_the_bound_condition_once(iec):
@@ -199,7 +228,14 @@ def test_the_statement_function_is_first_order_exact():
     assert s.U == pytest.approx(0.011 + stats.t.ppf(0.975, 7) * 2e-3, rel=1e-6)
     assert s.nu_eff == pytest.approx(7.6) and s.k is None
     assert s.u_c == g.u_c                           # the budget's u_c kept
-    assert table_bound_statement(g, 2.0, 1e-4, {"e1": 3e-3})[0] is g
+    # a stated table u: the table's line is no bound; the other bounded lines still are
+    assert table_bound_statement(g, 2.0, 1e-4, {"e_table": 3e-3})[0] is g
+    s1, d1 = table_bound_statement(g, 2.0, 1e-4, {"e_table": 3e-3, "e2": 1e-3})
+    assert d1["a"] == pytest.approx(5 * 1e-3, rel=1e-6) and list(d1["a_lines"]) == ["e2"]
+    u_rest = math.hypot(2 * 3e-3 / math.sqrt(3), 2e-3)       # e1 rectangular, n
+    nu_rest = u_rest ** 4 / (2e-3 ** 4 / 7.6)
+    assert s1.U == pytest.approx(5e-3 + stats.t.ppf(0.975, math.floor(nu_rest)) * u_rest,
+                                 rel=1e-6)
     from gonio.errors import GonioError
     with pytest.raises(GonioError, match="no line 'e9'"):
         table_bound_statement(g, 2.0, None, {"e9": 1.0})

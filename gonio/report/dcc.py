@@ -166,7 +166,8 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
 
 #: what a bound-condition interval is, in the DCC's words
 BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the bounded errors (the "
-                  "table's; the item's other bounded lines) at their bounds in their worst "
+                  "table's where no certificate u is stated for it; the item's other bounded "
+                  "lines) at their bounds in their worst "
                   "combination, a, plus k·u of the other lines; no "
                   "standard uncertainty of the item is certified")
 

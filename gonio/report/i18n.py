@@ -719,9 +719,10 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      "转台误差的界；不给出 E 的标准不确定度；p = {2} %"),
     # a bound-condition interval's ends (gonio.report.dcc.BOUND_INTERVAL)
     (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the bounded errors \(the "
-     r"table's; the item's other bounded lines\) at their bounds in their worst combination, a, plus k·u of the other lines; no standard "
+     r"table's where no certificate u is stated for it; the item's other bounded lines\) "
+     r"at their bounds in their worst combination, a, plus k·u of the other lines; no standard "
      r"uncertainty of the item is certified; p = (\S+) %",
-     "{1}：界限条件区间，值 ± (a + k·u)：有界误差（转台误差；该项的其他有界分量）取其界限的最不利组合 a，加其他分量的 k·u；"
+     "{1}：界限条件区间，值 ± (a + k·u)：有界误差（未给出证书不确定度时的转台误差；该项的其他有界分量）取其界限的最不利组合 a，加其他分量的 k·u；"
      "不给出该项的标准不确定度；p = {2} %"),
     (r"(.+): intervalMin of each element's bound-condition interval, value ± \(a \+ k·u\): "
      r"the table's errors at their bounds in their worst combination, a, plus k·u of the "

@@ -121,11 +121,16 @@ K_SOURCE_BOUND = "U = a + k·u"
 
 #: What a rate item stated by its bound condition keeps in its details (the parts of U).
 BOUND_CONDITION_BASIS = (
-    "bound condition: the bounded lines (the rate table at JJF 1535 Table 2's 0.05 %, no "
-    "certificate u stated; the gyro's temperature error at the set point) at their bounds "
+    "bound condition: the bounded lines (the rate table at JJF 1535 Table 2's 0.05 % "
+    "where no certificate u is stated for it; the gyro's temperature error at the set "
+    "point) at their bounds "
     "with one sign, added linearly, a = Σ|c_i|·a_i, plus k·u of the other lines, "
     "U = a + t_95(ν_rest)·u_rest (JCGM 100 4.3.7, 6.2); holds at least 95 % at every "
     "condition within the bounds")
+
+
+#: The budget symbol of the rate table's relative error (:func:`table_bound_statement`).
+TABLE_LINE = "e_table"
 
 
 def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict):
@@ -133,9 +138,12 @@ def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict
     (JJF 1535 7.2.1 K, Annex A u₁; IEC 62047-20 5.1.3.1 a_BASE, 5.1.3.2), one reading of
     what a laboratory that states no certificate u for its table can certify:
 
-    - the readings state ``rate_table_u_rel`` (``u_stated`` not None): ``u``, the GUM
-      budget (JCGM 100, U = k·u_c) unchanged — the table's line is a state of knowledge
-      (:func:`rate_table_line`);
+    - the readings state ``rate_table_u_rel`` (``u_stated`` not None): the table's line is
+      a state of knowledge (:func:`rate_table_line`, a certificate's normal u) and stays
+      among the other lines; the remaining bounded lines (``bounded`` less ``e_table``: the
+      gyro's temperature error e_TU) are still bounds the procedure allows at once, so the
+      statement below holds them (a budget whose only bounded line is the table's, or whose
+      other bounds are 0, keeps ``u``, the GUM budget, U = k·u_c, unchanged);
     - they state none: the table's error is known only as JJF 1535 Table 2's bound, and the
       procedure allows it at that bound together with the other bounded lines of the
       budget (``bounded``: {symbol: half-width a_i in the input's unit}; the gyro's
@@ -165,13 +173,18 @@ def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict
     0.000751
     >>> table_bound_statement(g, 1.0, 2.5e-4, {"e_table": 5e-4})[0] is g
     True
+    >>> s, d = table_bound_statement(g, 1.0, 2.5e-4, {"e_table": 5e-4, "e_T": 4e-4})
+    >>> sorted(d["a_lines"]), round(d["a"], 6)   # a stated table: e_T alone at its bound
+    (['e_T'], 0.0004)
     """
     import dataclasses
 
     from gonio.result.statement import coverage_k
 
     if u_stated is not None:
-        return u, {}
+        bounded = {s: h for s, h in bounded.items() if s != TABLE_LINE and float(h) > 0.0}
+        if not bounded:
+            return u, {}
     rows = {str(c.get("symbol")): c for c in u.components}
     missing = sorted(set(bounded) - set(rows))
     if missing:

@@ -295,8 +295,8 @@ def scale_factor(ctx: Context) -> Item:
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
     the rate table and the voltmeter (relative), and the gyro's temperature error at T_BASE
     (:func:`gyro_temperature_bound_c`: the chamber's deviation and the gyro's place in its
-    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`). Where the readings state no
-    certificate u for the table, stated by the bound condition (:func:`_bound_statement`)."""
+    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`). Stated by the bound condition
+    (:func:`_bound_statement`: e_TU, and the table where no certificate u is stated)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
@@ -310,15 +310,15 @@ def scale_factor(ctx: Context) -> Item:
 
 
 def _bound_statement(ctx: Context, u, value: float):
-    """The statement of an item with :func:`_u_rel_sf`'s budget: where the readings state no
-    certificate u for the rate table, the table's bound (e_table) and the gyro's
+    """The statement of an item with :func:`_u_rel_sf`'s budget, by the bound condition
+    (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`): the gyro's
     temperature error at T_BASE (e_TU: the chamber's bound × :func:`sf_tc_rel_bound`,
-    |T_c,SF/a| + its U; 0 where 5.1.3.4 is not measured, which the calibration states as a
-    finding, :func:`chamber_effect_finding`), both bounded and allowed at once, added linearly
-    (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`); otherwise the
-    GUM budget's U = k·u_c."""
-    if ctx.rate_table_u_rel is not None:
-        return u, {}
+    |T_c,SF/a| + its U) is a bound the procedure allows (the chamber anywhere within its
+    deviation and uniformity, Table 2), so it is added linearly, not as a rectangular line
+    (which covers as little as 84 % with the chamber at its bound); where the readings state
+    no certificate u for the rate table, the table's bound (e_table) is added with it. With
+    the table's u stated and e_TU 0 (5.1.3.4 not measured, which the calibration states as
+    a finding, :func:`chamber_effect_finding`) the GUM budget's U = k·u_c."""
     tc_bound, _ = sf_tc_rel_bound(ctx, _sf_runs(ctx, "scale_factor")[0]["a"])
     return table_bound_statement(u, value, ctx.rate_table_u_rel, {
         "e_table": TABLE2_RATE_ACCURACY_REL,
