@@ -557,8 +557,10 @@ def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
 
     try:
         for table in _tables():
-            if rows[table.name]:
-                s.execute(table.insert(), rows[table.name])
+            todo = _zone_kept(s, rows[table.name]) if table.name == "settings" \
+                else rows[table.name]
+            if todo:
+                s.execute(table.insert(), todo)
         if s.get_bind().dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
@@ -577,6 +579,26 @@ def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
         msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
         raise GonioError(f"records.json refused by the database ({msg}): nothing "
                          "restored", file=path) from None
+
+
+def _zone_kept(s, settings: list[dict]) -> list[dict]:
+    """The archive's ``settings`` rows to insert into the session's database, whose setting
+    ``timezone`` (written by its migration, or ``gonio db init``) the archive's zone
+    replaces (that row deleted first); an archive without a zone or with
+    an empty one (written before stores held one) keeps the database's, else gets this
+    machine's (:func:`gonio.records.models.machine_zone`), as the migration gives an older
+    store."""
+    from sqlalchemy import delete
+
+    from gonio.records.models import Setting, machine_zone
+
+    zone = next((r.get("value") for r in settings if r.get("key") == "timezone"), None)
+    live = s.scalar(select(Setting.value).where(Setting.key == "timezone"))
+    rest = [r for r in settings if r.get("key") != "timezone"]
+    if not zone and live:
+        return rest
+    s.execute(delete(Setting).where(Setting.key == "timezone"))
+    return settings if zone else rest + [{"key": "timezone", "value": machine_zone()}]
 
 
 def _swap_sqlite(store, rows: dict, path: Path, event: dict, who: str) -> None:
