@@ -40,7 +40,9 @@ def own_text(text: str, unmark: bool = True) -> str:
 def unmarked(text: str) -> str:
     """``text`` as a laboratory's own recording of the same values, without the bench's
     watermark (gonio.formats.watermark): every time written at the millisecond (a
-    laboratory's clock), the measured values as they are; in a file marked in its measured
+    laboratory's clock; at the microsecond in a file sampled faster, where two successive
+    times would read alike at the millisecond: a rate specification's angular-vibration run
+    at about 1 kHz), the measured values as they are; in a file marked in its measured
     columns (no times) the last written digit of every other measured cell (by an unkeyed
     CRC of its line) moved by one (9 → 8, else up), readings of the same values at the same
     resolution with parities of their own."""
@@ -48,6 +50,7 @@ def unmarked(text: str) -> str:
 
     from gonio.formats.watermark import TIME_COLUMN, marked_columns
     out, header, cols = [], None, {}
+    digits = _clock_decimals(text)
     for line in text.splitlines(keepends=True):
         if line.startswith("#") or not line.strip() or '"' in line:
             out.append(line)
@@ -63,12 +66,35 @@ def unmarked(text: str) -> str:
             if j >= len(cells) or not re.fullmatch(r"-?\d+(\.\d+)?", cells[j]):
                 continue
             if name == TIME_COLUMN:
-                cells[j] = f"{float(cells[j]):.3f}"
+                cells[j] = f"{float(cells[j]):.{digits}f}"
             elif zlib.crc32(f"{j}{body}".encode()) & 1:
                 d = int(cells[j][-1])
                 cells[j] = cells[j][:-1] + str(8 if d == 9 else d + 1)
         out.append(",".join(cells) + line[len(body):])
     return "".join(out)
+
+
+def _clock_decimals(text: str) -> int:
+    """3 (the millisecond) unless two successive distinct times of ``text``'s ``time_s``
+    column would read alike at it; then 6 (the microsecond)."""
+    from gonio.formats.watermark import TIME_COLUMN
+    j, last = None, None
+    for line in text.splitlines():
+        if line.startswith("#") or not line.strip() or '"' in line:
+            continue
+        cells = line.split(",")
+        if j is None:
+            if TIME_COLUMN not in cells:
+                return 3
+            j = cells.index(TIME_COLUMN)
+            continue
+        if j >= len(cells) or not re.fullmatch(r"-?\d+(\.\d+)?", cells[j]):
+            continue
+        t = float(cells[j])
+        if last is not None and t != last and round(t, 3) == round(last, 3):
+            return 6
+        last = t
+    return 3
 
 
 def resaved(text: str) -> str:

@@ -95,7 +95,7 @@ def jjf(tmp_path_factory):
 #: The fields of an item a result cell may show: its statement (value, max|E_i| and its
 #: sign, the interval's ends or bound, U, k) and the point it is at.
 CELL_FIELDS = re.compile(r"^items\.[a-z_]+\.(value|upper_bound|uncertainty\.[A-Za-z_.0-9]+|"
-                         r"details\.(max_abs_arcsec|position_deg))$")
+                         r"details\.(max_abs_arcsec|signed_extreme_arcsec|position_deg))$")
 #: What only the table beside the results may show.
 BESIDE = re.compile(r"estimates\.|range_deg_per_h|spread_arcsec|tilt_correction|"
                     r"table_calibration|draft_reading")

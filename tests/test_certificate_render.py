@@ -90,8 +90,13 @@ def test_every_number_in_html_equals_results_json(run):
     assert len(nums) >= 20
     U = run["results"]["extra"]["uncertainty"]["U_arcsec"]
     srcs = {s for s, _, _ in nums}
+    items = run["results"]["items"]
     for item in ITEMS:      # a range whose corrected estimate fell below zero: its bound
-        assert f"items.{item}.value" in srcs or f"items.{item}.upper_bound" in srcs, item
+        shown = {f"items.{item}.value", f"items.{item}.upper_bound"}
+        if item == "angle_deviation":   # E = ± max|E_i|: results.json's value is max|E_i|
+            assert items[item]["value"] == items[item]["details"]["max_abs_arcsec"]
+            shown.add(f"items.{item}.details.max_abs_arcsec")
+        assert shown & srcs, item
     # the per-point U printed is k·u + b, the table's bound at the point included
     assert "extra.uncertainty.U_bound_arcsec" in srcs
     for src, rule, text in nums:     # the certificate's minus sign (U+2212), else the same

@@ -409,8 +409,10 @@ def test_e_noise_free_exact_calibration(base):
     d_raw = deviation_budget(raw.results, raw.readings, p, settings, kind="draft")[0]
     assert d_cal.U_arcsec == d_raw.U_arcsec
     j = rep.result().to_json()["items"]["angle_deviation"]
-    assert j["value"] == pytest.approx(e.value) and j["details"]["table_calibration"]["source"] \
-        == "tc.csv"
+    # results.json certifies max|E_i| (7.4: E = ± max|E_i|); the signed extreme is its detail
+    assert j["value"] == pytest.approx(abs(e.value)) and j["details"]["table_calibration"][
+        "source"] == "tc.csv"
+    assert j["details"]["signed_extreme_arcsec"] == pytest.approx(e.value)
 
 
 def test_e_line_against_monte_carlo(base):
