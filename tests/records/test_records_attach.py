@@ -226,10 +226,12 @@ def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_re
     assert lab["environment"]["source"] == "readings"
     # the readings' "# temperature_c: 20.0" with its digits, as the certificate of gonio
     # calibrate on these readings states it
-    assert _environment_rows({}, lab, labels("en")) == [
+    # (the readings are the optical draft's: its room-temperature keys, as its renderer looks
+    # them up by the stored result's spec)
+    assert _environment_rows({}, lab, labels("en"), "ogam-draft") == [
         ("Temperature", "20.0 °C (taken from the readings' metadata)"),
         ("Relative humidity", "44 % (taken from the readings' metadata)")]
-    assert _environment_rows({}, lab, labels("zh"))[1] == ("相对湿度", "44 %（取自读数文件的元数据）")
+    assert _environment_rows({}, lab, labels("zh"), "ogam-draft")[1] == ("相对湿度", "44 %（取自读数文件的元数据）")
     from gonio.report.rate_dcc import _conditions
     names = [c[0] for c in _conditions({"metadata": {}, "items": {}}, lab)]
     assert names == ["room temperature (taken from the readings' metadata)",
@@ -237,9 +239,9 @@ def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_re
     # entered values are stated plainly; with a lab file but none entered, the readings'
     # value is stated as taken from them
     plain = dict(lab, environment={"temperature_c": 21.0, "humidity_pct": 40.0})
-    assert _environment_rows({}, plain, labels("en"))[0] == ("Temperature", "21 °C")
+    assert _environment_rows({}, plain, labels("en"), "ogam-draft")[0] == ("Temperature", "21 °C")
     assert _environment_rows({"temperature_c": "20.0"}, dict(lab, environment=None),
-                             labels("en"))[0] == (
+                             labels("en"), "ogam-draft")[0] == (
         "Temperature", "20.0 °C (taken from the readings' metadata)")
 
 
