@@ -708,6 +708,15 @@ DCC_ZH: dict[str, str] = {
     "gonio virtual bench": "gonio 虚拟台架",
 }
 
+#: gonio.report.dcc.BOUND_INTERVAL as a regular expression (written out, so that a change of
+#: the English fails the zh DCC test until its Chinese follows), and its Chinese.
+_BOUND_INTERVAL_RE = (r"bound-condition interval, value ± \(a \+ k·u\): the bounded errors "
+                      r"\(the table's where no certificate u is stated for it; the item's other "
+                      r"bounded lines\) at their bounds in their worst combination, a, plus k·u "
+                      r"of the other lines; no standard uncertainty of the item is certified")
+_BOUND_INTERVAL_ZH = ("值 ± (a + k·u)：有界误差（未给出证书不确定度时的转台误差；该项的其他有界分量）"
+                      "取其界限的最不利组合 a，加其他分量的 k·u；不给出该项的标准不确定度")
+
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
 DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
@@ -717,23 +726,15 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      r"standard uncertainty of E is certified; p = (\S+) %",
      "{1}：最大真值 |E_i| 的包含区间，各点延伸 k·u + b：u 为转台以外各分量的合成，b 为该点"
      "转台误差的界；不给出 E 的标准不确定度；p = {2} %"),
-    # a bound-condition interval's ends (gonio.report.dcc.BOUND_INTERVAL)
-    (r"(.+): bound-condition interval, value ± \(a \+ k·u\): the bounded errors \(the "
-     r"table's where no certificate u is stated for it; the item's other bounded lines\) "
-     r"at their bounds in their worst combination, a, plus k·u of the other lines; no standard "
-     r"uncertainty of the item is certified; p = (\S+) %",
-     "{1}：界限条件区间，值 ± (a + k·u)：有界误差（未给出证书不确定度时的转台误差；该项的其他有界分量）取其界限的最不利组合 a，加其他分量的 k·u；"
-     "不给出该项的标准不确定度；p = {2} %"),
-    (r"(.+): intervalMin of each element's bound-condition interval, value ± \(a \+ k·u\): "
-     r"the table's errors at their bounds in their worst combination, a, plus k·u of the "
-     r"other lines; no standard uncertainty of the item is certified; p = (\S+) %",
-     "{1}：各元素界限条件区间的下限，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他"
-     "分量的 k·u；不给出该项的标准不确定度；p = {2} %"),
-    (r"(.+): intervalMax of each element's bound-condition interval, value ± \(a \+ k·u\): "
-     r"the table's errors at their bounds in their worst combination, a, plus k·u of the "
-     r"other lines; no standard uncertainty of the item is certified; p = (\S+) %",
-     "{1}：各元素界限条件区间的上限，值 ± (a + k·u)：转台误差取其界限的最不利组合 a，加其他"
-     "分量的 k·u；不给出该项的标准不确定度；p = {2} %"),
+    # a bound-condition interval's ends (gonio.report.dcc.BOUND_INTERVAL): the lower and upper
+    # ends of each element's of a list (gonio.report.item_dcc), then an item's (its "(.+)"
+    # would take a list's name with its "intervalMin of each element's")
+    (rf"(.+): intervalMin of each element's {_BOUND_INTERVAL_RE}; p = (\S+) %",
+     "{1}：各元素界限条件区间的下限，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
+    (rf"(.+): intervalMax of each element's {_BOUND_INTERVAL_RE}; p = (\S+) %",
+     "{1}：各元素界限条件区间的上限，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
+    (rf"(.+): {_BOUND_INTERVAL_RE}; p = (\S+) %",
+     "{1}：界限条件区间，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     (r"Statement of conformity: (.+)", "符合性声明：{1}"),
     (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance "

@@ -138,6 +138,16 @@ READINGS_ZH = {
 
 #: Budget sources and reasons in Chinese (see gonio.report.i18n.phrase_zh).
 PHRASES_ZH = COMMON_PHRASES_ZH + (
+    # the budget line of a_BASE's relative u_c in an item divided by it (items._e_a), and the
+    # rate table's line standing for it where a_BASE's u_c is not known
+    (r"scale factor, relative: u_c\(a_BASE\)/a_BASE of 5\.1\.3\.1, with its ν_eff",
+     "标度因数（相对）：5.1.3.1 的 u_c(a_BASE)/a_BASE，含其有效自由度 ν_eff"),
+    (r"scale factor, relative: the rate table's line alone \(a_BASE's u_c not known\)",
+     "标度因数（相对）：仅计速率转台分量（a_BASE 的 u_c 未知）"),
+    (r"scale factor, relative: the rate table's line alone \(a_BASE's u_c not known\): no "
+     r"certificate u stated; JJF 1535 Table 2's 0\.05 % as a rectangular bound",
+     "标度因数（相对）：仅计速率转台分量（a_BASE 的 u_c 未知）：未给出证书标准不确定度，按 JJF 1535 "
+     "表2 的 0.05 % 作矩形分布界限"),
     # the chamber-effect-unbounded finding (gonio.specs.iec62047_20.items.chamber_effect_finding)
     (r"the chamber-deviation effect on a_BASE is not bounded: the scale-factor temperature "
      r"coefficient of 5\.1\.3\.4 is not measured \((.+)\), so U\(a_BASE\) and U of 5\.1\.3\.2 "

@@ -118,6 +118,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      r"flicker, random walk\)", "B_s 的抽样：各段记录相关分块均值的有效自由度 ν（变差图：白噪声、"
                                  "闪烁噪声、随机游走）"),
     (r"mean of K_m", "K_m 的平均值"),
+    # the budget line of K̄'s relative u_c in an item computed with K (items._e_K)
+    (r"scale factor, relative: u_c\(K\)/K̄ of 7\.2\.1, with its ν_eff",
+     "标度因数（相对）：7.2.1 的 u_c(K)/K̄，含其有效自由度 ν_eff"),
     (r"rate table, relative(?: \(u1\))?", "速率转台（相对）"),
     (r"data acquisition, relative(?: \(u2\))?", "数据采集（相对）"),
     (r"repeatability of the mean of Q calibrations, s\(K_m\)/√Q", "Q 次校准平均值的重复性 s(K_m)/√Q"),
