@@ -363,22 +363,37 @@ def test_optical_bench_as_rate_sensor():
 
 def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
     """JCGM 101: with ``monte_carlo_trials`` every item's budget is also propagated by Monte
-    Carlo and the GUM interval checked against it (JCGM 101 8). Gaussian-dominated budgets
-    (ARW, bandwidth) validate; the threshold is stated by the 95 % range of its outcome
-    distribution (a discrete distribution, no GUM propagation, so no Monte Carlo of a GUM
-    interval): u_c is that distribution's standard deviation, recomputed here from the
-    outcome probabilities in the item's details, and the interval holds the value. 10⁶ trials: the Monte Carlo's own
-    error of a 95 % end, ≈ 0.0025·u at 10⁶ (0.006·u at 2·10⁵), stays below the tolerance δ
-    (half a unit in the second digit of u: u/190 to u/20) for ARW's u of 0.0057 °/√h."""
+    Carlo and the GUM interval checked against it (JCGM 101 8). A Gaussian-dominated budget
+    (bandwidth) validates; ARW (7.2.13) and the threshold are stated by no GUM interval, so
+    there is no Monte Carlo of one: ARW is a dispersion stated by its one-sided χ² 95 %
+    interval [0, N·√(ν/χ²_0.05,ν)], ν = ½(N/u_c)² (JCGM 100 E.4.3 read backwards), checked
+    here by scipy's χ² and by drawing s = σ·√(χ²_ν/ν) 10⁶ times (the interval covers σ in
+    95 % of them); the threshold is stated by the 95 % range of its outcome distribution (a
+    discrete distribution, no GUM propagation): u_c is that distribution's standard
+    deviation, recomputed here from the outcome probabilities in the item's details, and the
+    interval holds the value. 10⁶ trials: the Monte Carlo's own error of a 95 % end, ≈
+    0.0025·u at 10⁶ (0.006·u at 2·10⁵), stays below the tolerance δ (half a unit in the
+    second digit of u: u/190 to u/20)."""
+    from scipy.stats import chi2
     from gonio.specs.jjf1535 import calibrate
     result, _ = jjf_noise_on[0]
     assert all(it.uncertainty.monte_carlo is None for it in result.items.values() if it.measured)
     r2 = calibrate(_readings_of(0), str(_PROTO[0]), monte_carlo_trials=1_000_000)
-    for key in ("angle_random_walk", "bandwidth"):
-        mc = r2.items[key].uncertainty.monte_carlo
-        assert mc["validated"], (key, mc)
-        # a t_50 input has standard deviation √(50/48) = 1.02 of its u
-        assert mc["u"] == pytest.approx(r2.items[key].uncertainty.u_c * math.sqrt(50 / 48), rel=0.02)
+    mc = r2.items["bandwidth"].uncertainty.monte_carlo
+    assert mc["validated"], mc
+    # a t_50 input has standard deviation √(50/48) = 1.02 of its u
+    assert mc["u"] == pytest.approx(r2.items["bandwidth"].uncertainty.u_c * math.sqrt(50 / 48),
+                                    rel=0.02)
+    arw = r2.items["angle_random_walk"]
+    u = arw.uncertainty
+    assert u.monte_carlo is None and u.k is None and u.k_source == "chi-square"
+    nu = 0.5 * (arw.value / u.u_c) ** 2
+    assert u.nu_eff == pytest.approx(nu, rel=1e-12)
+    nu_k = nu if nu > 1000 else max(1, math.floor(nu))      # ν as stated (GUM G.6.4)
+    upper = arw.value * math.sqrt(nu_k / chi2.ppf(0.05, nu_k))
+    assert u.interval[0] == 0.0 and u.interval[1] == pytest.approx(upper, rel=1e-12)
+    draws = np.sqrt(np.random.default_rng(1).chisquare(nu_k, 1_000_000) / nu_k)  # s/σ
+    assert np.mean(1.0 <= draws * upper / arw.value) == pytest.approx(0.95, abs=0.002)
     th = r2.items["threshold"]
     assert th.uncertainty.monte_carlo is None and th.uncertainty.k is None
     pmf = th.details["outcome_pmf"]
