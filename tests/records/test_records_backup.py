@@ -301,3 +301,47 @@ def test_backup_refuses_rows_restore_would_refuse(records, tmp_path, capsys):
         s.commit()
     cli(["db", "backup", archive, "--data", records.data], capsys, 0)
     cli(["db", "restore", archive, "--data", tmp_path / "other"], capsys, 0)
+
+
+def test_a_restore_takes_the_archive_s_time_zone(sqlite_store, tmp_path, monkeypatch):
+    """A fresh store holds its machine's zone (migration 0013): a restore into it takes the
+    archive's zone instead of colliding with that row; an archive without a zone, or with an
+    empty one (written before stores held one), keeps the target's zone, and a replacing
+    restore gives it the machine's zone, as the migration gives an older store."""
+    from gonio.records.models import records_zone
+
+    monkeypatch.setenv("TZ", "America/Los_Angeles")       # the machine's zone, not the lab's
+    people = make_people(sqlite_store)
+    services.set_settings(sqlite_store, people["admin"], timezone="Asia/Shanghai")
+    archive = tmp_path / "b.zip"
+    backup(sqlite_store, archive)
+    target = open_store(None, tmp_path / "t1")
+    assert records_zone(target) == "America/Los_Angeles"
+    restore(target, archive)
+    assert records_zone(target) == "Asia/Shanghai"
+    target.close()
+
+    def zone_rows(doc, value):
+        rows = doc["tables"]["settings"]["rows"]
+        key = doc["tables"]["settings"]["columns"].index("key")
+        kept = [r for r in rows if r[key] != "timezone"]
+        if value is not None:
+            kept.append([value if c == "value" else "timezone"
+                         for c in doc["tables"]["settings"]["columns"]])
+        doc["tables"]["settings"]["rows"] = kept
+        return doc
+
+    for i, value in enumerate((None, "")):
+        old = archive_without(archive, tmp_path / f"old{i}.zip",
+                              records_json=lambda d, v=value: zone_rows(d, v))
+        monkeypatch.setenv("TZ", "Europe/Berlin")         # the target's zone by its migration
+        target = open_store(None, tmp_path / f"o{i}")
+        monkeypatch.setenv("TZ", "America/Los_Angeles")
+        assert records_zone(target) == "Europe/Berlin"
+        restore(target, old)
+        assert records_zone(target) == "Europe/Berlin"
+        with target.session() as s:
+            assert s.scalar(text("SELECT count(*) FROM settings WHERE key = 'timezone'")) == 1
+        restore(target, old, replace=True, actor=services.user(target, "admin"))
+        assert records_zone(target) == "America/Los_Angeles"
+        target.close()
