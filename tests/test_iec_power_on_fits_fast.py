@@ -82,11 +82,11 @@ def test_budget_is_the_same_with_the_design_kept():
     t = np.arange(900) * 0.1
     recs = [power_on_record(t, 0.3 + np.exp(-t / 30.0) + 0.01 * rng.standard_normal(900), 10)
             for _ in range(2)]
-    I._DESIGNS.clear()
+    I._transient_designs_cached.cache_clear()
     first = I.power_on_drift_budget(recs, 60, lambda s: 0.0, None)
-    assert I._DESIGNS                                       # the design kept
+    assert I._transient_designs_cached.cache_info().currsize  # the design kept
     second = I.power_on_drift_budget(recs, 60, lambda s: 0.0, None)
-    I._DESIGNS.clear()
+    I._transient_designs_cached.cache_clear()
     third = I.power_on_drift_budget(recs, 60, lambda s: 0.0, None)
     for other in (second, third):
         assert first[0] == other[0] and first[1] == other[1] and first[3] == other[3]

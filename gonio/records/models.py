@@ -38,7 +38,8 @@ def utcnow() -> _dt.datetime:
 def laboratory_zone(name: str = "") -> _dt.tzinfo | None:
     """The laboratory's time zone: the IANA name ``name`` (the records' setting
     ``timezone``, e.g. ``Asia/Shanghai``) read by :mod:`zoneinfo`, or None for "" (read as
-    UTC by :func:`laboratory_date`; a store holds an explicit zone, :func:`machine_zone`). An unknown name is a GonioError naming the setting.
+    UTC by :func:`laboratory_date`; a store holds an explicit zone, :func:`machine_zone`).
+    An unknown name is a GonioError naming the setting.
 
     >>> laboratory_zone("Asia/Shanghai")
     zoneinfo.ZoneInfo(key='Asia/Shanghai')
@@ -64,7 +65,8 @@ def laboratory_zone(name: str = "") -> _dt.tzinfo | None:
 def laboratory_date(at_utc: _dt.datetime, zone: str = "") -> _dt.date:
     """The laboratory's calendar date at the naive UTC time ``at_utc`` (what the records'
     times hold), in its time zone ``zone`` (:func:`laboratory_zone`; "" UTC, the same in
-    every process: never the process's local zone). The one conversion from the records' UTC times to the laboratory's calendar dates
+    every process: never the process's local zone). The one conversion from the records'
+    UTC times to the laboratory's calendar dates
     (calibration date, due dates, date of issue): 23:30 UTC on 2026-12-01 is 2026-12-02 in
     Beijing and still 2026-12-01 in Los Angeles.
 

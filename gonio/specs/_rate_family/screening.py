@@ -449,7 +449,8 @@ def rate_table_unstated(metadata: dict, file, assumed_by: str) -> list[Finding]:
     certificate u): the budgets then take the table to conform to JJF 1535 Table 2's rate
     accuracy 0.05 % (added linearly at that bound in the items stated by the bound
     condition, :func:`.rate_records.table_bound_statement`; one rectangular line in the
-    others, :func:`.rate_records.rate_table_line`), an assumption the certificate states, naming whose it is (``assumed_by``: JJF 1535's
+    others, :func:`.rate_records.rate_table_line`), an assumption the certificate states,
+    naming whose it is (``assumed_by``: JJF 1535's
     requirement, or the laboratory's own where the specification states none); ``[]``
     where the readings state it.
 

@@ -9,6 +9,7 @@ calibration's own data (GUM, k = t₉₅(ν_eff)).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -1874,25 +1875,22 @@ def _excess_slope(kept, r_hat: float, r_at: float) -> float:
 POWER_ON_MC_SEED = 6204720535           # fixed: the same records give the same value
 
 
-#: :func:`_transient_designs` already computed, by (block times, n, P, nr): the replicates of
-#: one budget (and its shares' reruns) and repeated budgets on the same timing reuse them
-_DESIGNS: dict = {}
-
-
 def _transient_designs(tt: np.ndarray, n: int, P: int, nr: int):
     """Per τ on a log grid from the step to 20 record lengths: (the smoothed values of
     e^(−t/τ) over the blocks at ``tt``, its mean over the first ``nr`` samples, the design
     matrix [1, smoothed values] and its pseudo-inverse), the design of
     :func:`_transient_fits` (block and reference means of the model, not its values at the
     block centres); the pseudo-inverse is computed once here, not per fit. The same
-    timing's design is computed once (read-only arrays, shared)."""
-    tt = np.asarray(tt, float)
-    key = (tt.tobytes(), int(n), int(P), int(nr))
-    if key not in _DESIGNS:
-        if len(_DESIGNS) >= 32:
-            _DESIGNS.clear()
-        _DESIGNS[key] = _transient_designs_new(tt, n, P, nr)
-    return _DESIGNS[key]
+    timing's design is computed once (:func:`functools.lru_cache` of the last 32 timings:
+    the replicates of one budget, its shares' reruns and repeated budgets reuse it;
+    read-only arrays, shared)."""
+    return _transient_designs_cached(np.asarray(tt, float).tobytes(), int(n), int(P), int(nr))
+
+
+@functools.lru_cache(maxsize=32)
+def _transient_designs_cached(tt_bytes: bytes, n: int, P: int, nr: int):
+    """:func:`_transient_designs` by the block times' bytes (hashable)."""
+    return _transient_designs_new(np.frombuffer(tt_bytes, float), n, P, nr)
 
 
 def _transient_designs_new(tt: np.ndarray, n: int, P: int, nr: int):
