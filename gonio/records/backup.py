@@ -480,7 +480,7 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
     who = actor.username if actor is not None else "(command line)"
     if not replace:
         with store.writing() as s:
-            _write(s, rows, path, event, who)
+            _write(s, rows, path, event, who, own=_set_aside(s))
             s.commit()
     elif store.engine.dialect.name == "sqlite":
         _swap_sqlite(store, rows, path, event, who)
@@ -546,21 +546,32 @@ def _put_blob(root: Path, sha: str, zf: zipfile.ZipFile, path: Path) -> None:
                          "records are unchanged; nothing restored", file=root) from None
 
 
-def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
+def _write(s, rows: dict, path: Path, event: dict, who: str, own: list | None = None) -> None:
     """Insert the checked ``rows`` in dependency order in the session's transaction, move
     PostgreSQL's id sequences past them, and append the restore's audit event (its user the
-    restored account of ``who``, if there is one). A row the database refuses is a
-    GonioError (the transaction rolled back)."""
+    restored account of ``who``, if there is one). ``own``: the target store's own audit
+    events, set aside by :func:`_set_aside` (a restore into a store that holds no user):
+    appended after the archive's, unchanged but for their ids, the restore's event naming
+    their ids before and after and the store's settings the archive's replaced. A row the
+    database refuses is a GonioError (the transaction rolled back)."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from gonio.records.models import AuditEvent
 
     try:
         for table in _tables():
-            todo = _zone_kept(s, rows[table.name]) if table.name == "settings" \
-                else rows[table.name]
+            todo, replaced = (_settings_kept(s, rows[table.name]) if table.name == "settings"
+                              else (rows[table.name], {}))
+            if own is not None and replaced:
+                event["settings_replaced"] = replaced
             if todo:
                 s.execute(table.insert(), todo)
+        if own:
+            start = max((r["id"] for r in rows["audit_events"]), default=0) + 1
+            moved = [dict(r, id=start + i) for i, r in enumerate(own)]
+            s.execute(AuditEvent.__table__.insert(), moved)
+            event["store_events"] = {"were": [r["id"] for r in own],
+                                     "now": [r["id"] for r in moved]}
         if s.get_bind().dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
@@ -581,24 +592,55 @@ def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
                          "restored", file=path) from None
 
 
-def _zone_kept(s, settings: list[dict]) -> list[dict]:
-    """The archive's ``settings`` rows to insert into the session's database, whose setting
-    ``timezone`` (written by its migration, or ``gonio db init``) the archive's zone
-    replaces (that row deleted first); an archive without a zone or with
-    an empty one (written before stores held one) keeps the database's, else gets this
+def _settings_kept(s, settings: list[dict]) -> tuple[list[dict], dict]:
+    """The archive's ``settings`` rows to insert into the session's database, and the
+    database's values they replace (``{key: [its value, the archive's]}``, where they
+    differ). The archive's setting of a key replaces the database's (that row deleted
+    first: ``gonio db init``'s laboratory details, the ``timezone`` its migration wrote); a
+    key the archive lacks keeps the database's row. An archive without a zone or with an
+    empty one (written before stores held one) keeps the database's, else gets this
     machine's (:func:`gonio.records.models.machine_zone`), as the migration gives an older
     store."""
     from sqlalchemy import delete
 
     from gonio.records.models import Setting, machine_zone
 
-    zone = next((r.get("value") for r in settings if r.get("key") == "timezone"), None)
-    live = s.scalar(select(Setting.value).where(Setting.key == "timezone"))
-    rest = [r for r in settings if r.get("key") != "timezone"]
-    if not zone and live:
-        return rest
-    s.execute(delete(Setting).where(Setting.key == "timezone"))
-    return settings if zone else rest + [{"key": "timezone", "value": machine_zone()}]
+    live = dict(s.execute(select(Setting.key, Setting.value)).all())
+    todo = [r for r in settings if r.get("key") != "timezone" or r.get("value")]
+    if not any(r.get("key") == "timezone" for r in todo) and not live.get("timezone"):
+        todo.append({"key": "timezone", "value": machine_zone()})
+    keys = [r.get("key") for r in todo]
+    replaced = {r["key"]: [live[r["key"]], r.get("value")] for r in todo
+                if r.get("key") in live and live[r["key"]] != r.get("value")}
+    if keys:
+        s.execute(delete(Setting).where(Setting.key.in_(keys)))
+    return todo, replaced
+
+
+def _set_aside(s) -> list[dict]:
+    """The audit events a store that holds no user has already (``gonio db init``'s
+    settings), as rows in id order, removed from ``audit_events`` in the session's
+    transaction, so that the archive's trail keeps its own ids; :func:`_write` appends them
+    after the archive's. The table refuses ``DELETE`` (its triggers): PostgreSQL empties it
+    by ``TRUNCATE`` (no row trigger fires), SQLite drops its trigger, deletes and makes the
+    trigger again from its own stored text — one transaction, rolled back on any failure."""
+    from gonio.records.models import AuditEvent
+
+    table = AuditEvent.__table__
+    own = [dict(r._mapping) for r in s.execute(select(table).order_by(table.c.id))]
+    if not own:
+        return own
+    if s.get_bind().dialect.name == "postgresql":
+        s.execute(text("TRUNCATE audit_events"))
+        return own
+    trigger = s.scalar(text("SELECT sql FROM sqlite_master WHERE type = 'trigger' "
+                            "AND name = 'audit_events_no_delete'"))
+    if trigger:
+        s.execute(text("DROP TRIGGER audit_events_no_delete"))
+    s.execute(table.delete())
+    if trigger:
+        s.execute(text(trigger))
+    return own
 
 
 def _swap_sqlite(store, rows: dict, path: Path, event: dict, who: str) -> None:
