@@ -393,7 +393,10 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
     open binary file (``path`` then only names it); ``name``: the archive's name for the
     audit event (an upload's own name), else the file's.
 
-    Without ``replace`` the database must be empty (``gonio db restore``). With ``replace``
+    Without ``replace`` the database must hold no user (``gonio db restore``): the settings
+    ``gonio db init`` wrote are replaced by the archive's of the same key and their audit
+    events appended after the archive's, which keep their ids (:func:`_set_aside`,
+    :func:`_settings_kept`). With ``replace``
     (an admin ``actor``, the browser's restore) the live records are replaced atomically:
     SQLite — the archive is written into a new database file next to the live one, which is
     swapped in by one rename once complete (the replaced file is kept beside it as

@@ -345,3 +345,112 @@ def test_a_restore_takes_the_archive_s_time_zone(sqlite_store, tmp_path, monkeyp
         restore(target, old, replace=True, actor=services.user(target, "admin"))
         assert records_zone(target) == "America/Los_Angeles"
         target.close()
+
+
+def _trail(st) -> list[dict]:
+    """The audit trail's rows in id order, every value as records.json writes it."""
+    with st.session() as s:
+        return [{k: v.isoformat() if hasattr(v, "isoformat") else v
+                 for k, v in r._mapping.items()}
+                for r in s.execute(select(AuditEvent.__table__).order_by(AuditEvent.id))]
+
+
+def test_a_restore_into_an_initialised_store_keeps_both_trails(store, tmp_path, capsys,
+                                                               request):
+    """``gonio db init`` with every option writes settings and their audit events; a
+    ``gonio db restore`` into that store collided with them (audit_events.id, settings'
+    key). Now the archive's trail comes back row for row under its own ids (compared with
+    the archive's records.json, read here independently), the store's own events follow it
+    unchanged but for their ids, the restore's event is the newest and names both, the
+    archive's settings replace the store's (the zone too), a setting only the store has
+    stays, the trail still refuses DELETE and UPDATE, and the next event follows the
+    restore's. On SQLite and PostgreSQL, from the command line."""
+    from sqlalchemy.exc import DBAPIError
+
+    from gonio.records.models import records_zone
+
+    people = make_people(store)
+    services.set_settings(store, people["admin"], timezone="Asia/Shanghai", lab_name="Lab A",
+                          lab_address="1 A Street")
+    archive = tmp_path / "a.zip"
+    backup(store, archive)
+    with zipfile.ZipFile(archive) as zf:
+        doc = json.loads(zf.read("records.json"))["tables"]
+    theirs = [dict(zip(doc["audit_events"]["columns"], r)) for r in doc["audit_events"]["rows"]]
+    assert len(theirs) >= 6
+
+    url = None
+    if store.engine.dialect.name == "postgresql":
+        from .conftest import new_pg_database
+        url = new_pg_database(request.getfixturevalue("pg_server"))
+    where = (["--database", url] if url else []) + ["--data", tmp_path / "t"]
+    init = {"--timezone": "Europe/Berlin", "--lab-name": "Lab B", "--lab-address": "2 B Road",
+            "--lab-accreditation": "CNAS L0000", "--lab-contact": "b@example.org"}
+    cli(["db", "init", *where, *[x for kv in init.items() for x in kv]], capsys, 0)
+    target = open_store(url, tmp_path / "t")
+    try:
+        own = _trail(target)
+        assert len(own) == 5 and {e["entity_id"] for e in own} == {
+            "timezone", "lab_name", "lab_address", "lab_accreditation", "lab_contact"}
+        target.engine.dispose()
+        cli(["db", "restore", *where, archive], capsys, 0)
+        trail = _trail(target)
+        assert trail[:len(theirs)] == theirs                   # the archive's, row for row
+        after = trail[len(theirs):-1]
+        first = max(e["id"] for e in theirs) + 1
+        assert [e["id"] for e in after] == list(range(first, first + len(own)))
+        assert [dict(e, id=None) for e in after] == [dict(e, id=None) for e in own]
+        last = trail[-1]
+        assert last["action"] == "restore" and last["id"] == first + len(own)
+        said = json.loads(last["after_json"])
+        assert said["store_events"] == {"were": [e["id"] for e in own],
+                                        "now": [e["id"] for e in after]}
+        assert said["settings_replaced"] == {"timezone": ["Europe/Berlin", "Asia/Shanghai"],
+                                             "lab_name": ["Lab B", "Lab A"],
+                                             "lab_address": ["2 B Road", "1 A Street"]}
+        assert records_zone(target) == "Asia/Shanghai"
+        got = services.settings(target)
+        assert (got["lab_name"], got["lab_address"], got["lab_accreditation"],
+                got["lab_contact"]) == ("Lab A", "1 A Street", "CNAS L0000", "b@example.org")
+        for sql in ("DELETE FROM audit_events WHERE id = 1",
+                    "UPDATE audit_events SET action = 'x' WHERE id = 1"):
+            with pytest.raises(DBAPIError, match="append-only"):
+                with target.engine.begin() as c:
+                    c.execute(text(sql))
+        services.set_settings(target, services.user(target, "admin"), lab_name="Lab C")
+        assert _trail(target)[-1]["id"] == last["id"] + 1
+        target.engine.dispose()
+        cli(["db", "verify", *where], capsys, 0)
+    finally:
+        target.close()
+
+
+def test_a_refused_restore_leaves_an_initialised_store_s_trail(sqlite_store, tmp_path,
+                                                                capsys):
+    """A restore the database refuses part-way (two users with one id) after the store's own
+    events were set aside leaves them where they were, and the trail still append-only."""
+    from sqlalchemy.exc import DBAPIError
+
+    make_people(sqlite_store)
+    archive = tmp_path / "a.zip"
+    backup(sqlite_store, archive)
+
+    def twice(doc):
+        users = doc["tables"]["users"]["rows"]
+        users.append(list(users[0]))
+        return doc
+
+    bad = archive_without(archive, tmp_path / "bad.zip", records_json=twice)
+    cli(["db", "init", "--data", tmp_path / "t", "--lab-name", "Lab B"], capsys, 0)
+    target = open_store(None, tmp_path / "t")
+    try:
+        before = _trail(target)
+        target.engine.dispose()
+        out = cli(["db", "restore", "--data", tmp_path / "t", bad], capsys, 2)
+        assert "nothing restored" in out.err
+        assert _trail(target) == before and len(before) == 1
+        with pytest.raises(DBAPIError, match="append-only"):
+            with target.engine.begin() as c:
+                c.execute(text("DELETE FROM audit_events"))
+    finally:
+        target.close()
