@@ -630,7 +630,7 @@ def _set_aside(s) -> list[dict]:
     from gonio.records.models import AuditEvent
 
     table = AuditEvent.__table__
-    own = [dict(r._mapping) for r in s.execute(select(table).order_by(table.c.id))]
+    own = [dict(r) for r in s.execute(select(table).order_by(table.c.id)).mappings()]
     if not own:
         return own
     if s.get_bind().dialect.name == "postgresql":

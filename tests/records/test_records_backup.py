@@ -351,8 +351,9 @@ def _trail(st) -> list[dict]:
     """The audit trail's rows in id order, every value as records.json writes it."""
     with st.session() as s:
         return [{k: v.isoformat() if hasattr(v, "isoformat") else v
-                 for k, v in r._mapping.items()}
-                for r in s.execute(select(AuditEvent.__table__).order_by(AuditEvent.id))]
+                 for k, v in r.items()}
+                for r in s.execute(select(AuditEvent.__table__)
+                                   .order_by(AuditEvent.id)).mappings()]
 
 
 def test_a_restore_into_an_initialised_store_keeps_both_trails(store, tmp_path, capsys,
