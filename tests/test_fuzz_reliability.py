@@ -14,6 +14,7 @@ except where the CLI layer itself is under test.
 from __future__ import annotations
 
 import contextlib
+import copy
 import hashlib
 import json
 import math
@@ -143,6 +144,20 @@ CASES: list[str] = []          # names of every generated case (their number is 
 
 def count(name: str) -> None:
     CASES.append(name)
+
+
+@pytest.fixture(scope="module")
+def _full_report_once():
+    from gonio.specs.ogam_draft.calibration import calibrate
+    return calibrate(FULL, FULL_PROTOCOL)
+
+
+@pytest.fixture
+def full_report(_full_report_once):
+    """``calibrate(FULL, FULL_PROTOCOL)``: computed once for the module (a deterministic
+    function of the two files; four tests write it), each test given its own deep copy, as
+    ``write_outputs`` changes the report it writes."""
+    return copy.deepcopy(_full_report_once)
 
 
 # ----------------------------------------------------------------------------- special files
@@ -485,16 +500,15 @@ def test_output_place_failures_cli(tmp_path, capsys):
     no_debris(tmp_path)
 
 
-def test_read_only_folder(tmp_path):
+def test_read_only_folder(tmp_path, full_report):
     ro = tmp_path / "ro"
     ro.mkdir()
     if subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(ro)],
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a read-only tmpfs here (needs root and mount rights)")
     try:
-        from gonio.specs.ogam_draft.calibration import calibrate
         from gonio.specs.ogam_draft.outputs import write_outputs
-        rep = calibrate(FULL, FULL_PROTOCOL)
+        rep = full_report
         e = api_error(write_outputs, rep, ro / "out")
         assert "Read-only" in str(e) or "read-only" in str(e).lower(), str(e)
         count("out-place:read-only")
@@ -502,16 +516,15 @@ def test_read_only_folder(tmp_path):
         subprocess.run(["umount", str(ro)])
 
 
-def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
+def test_full_disk_leaves_previous_set_and_no_debris(tmp_path, full_report):
     mnt = tmp_path / "small"
     mnt.mkdir()
     if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(mnt)],
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a 300 KB tmpfs here (needs root and mount rights)")
     try:
-        from gonio.specs.ogam_draft.calibration import calibrate
         from gonio.specs.ogam_draft.outputs import write_outputs
-        rep = calibrate(FULL, FULL_PROTOCOL)
+        rep = full_report
         out = mnt / "out"
         prev = _previous_set(out)
         for fill_kb in (0, 100, 200, 400):
@@ -536,12 +549,11 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
         subprocess.run(["umount", str(mnt)])
 
 
-def test_failed_rerun_leaves_previous_set(tmp_path, monkeypatch):
-    from gonio.specs.ogam_draft.calibration import calibrate
+def test_failed_rerun_leaves_previous_set(tmp_path, monkeypatch, full_report):
     from gonio.specs.ogam_draft.outputs import write_outputs
     import gonio.specs.ogam_draft.outputs as cert       # the writer the outputs call
 
-    rep = calibrate(FULL, FULL_PROTOCOL)
+    rep = full_report
     out = tmp_path / "D"
     write_outputs(rep, out)
     set_is_complete(out)
@@ -918,18 +930,17 @@ def test_cli_process_level_one_line(tmp_path):
 
 # ----------------------------------------------------------------------------- certificate text
 
-def test_user_text_rendered_literally(tmp_path):
+def test_user_text_rendered_literally(tmp_path, full_report):
     """Markup, TeX and bidirectional controls in lab text are rendered literally; control
     characters and over-long fields are refused by the lab reader naming the key (issue 26;
     before, they were stripped or clipped on the page)."""
-    from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_outputs
     from gonio.formats.lab import load_lab
 
     hostile = [("$\\foo$ \u202eevil\u202c <script>alert(1)</script>", "a b $x^2$ \\textbf{b}", None),
                ("x" * 2000, "名" * 300, None),
                ("ok", "a\x00b\x1bc", "instrument.serial"), ("x" * 20_000, "s", "laboratory.name")]
-    rep = calibrate(FULL, FULL_PROTOCOL)
+    rep = full_report
     for i, (name, serial, refused_key) in enumerate(hostile):
         lab = LAB_TEXT
         for key, val in (("name", name), ("serial", serial)):
