@@ -111,6 +111,9 @@ def canonical(cell) -> str:
     >>> canonical("60.0"), canonical("60"), canonical(" 6E1"), canonical("-0"), canonical("+x")
     ('60', '60', '60', '0', '+x')
     """
+    if type(cell) is str:               # a CSV cell: the same steps as below, sooner
+        c = cell.strip()
+        return "%.15g" % (float(c) + 0.0) if _NUMBER.match(c) else c
     if isinstance(cell, (int, float, np.integer, np.floating)):
         return "%.15g" % (float(cell) + 0.0)
     c = str(cell).strip()
@@ -183,8 +186,24 @@ def _iter_rows(lines):
         yield i, (next(csv.reader([s])) if '"' in s else s.split(","))
 
 
-def _context(cells, marked) -> str:
-    return "\x1f".join(canonical(c) for j, c in enumerate(cells) if j not in marked)
+#: The most texts a :func:`_context` memo holds before it starts afresh (bounded memory).
+_MEMO_MAX = 200_000
+
+
+def _context(cells, marked, memo: dict | None = None) -> str:
+    """The row's other cells (not in ``marked``), :func:`canonical` and joined by ␟.
+    ``memo``: {text: canonical text} kept across the rows of one file (its set points,
+    steps and empty cells repeat), the same texts as :func:`canonical`'s."""
+    if memo is None:
+        return "\x1f".join(canonical(c) for j, c in enumerate(cells) if j not in marked)
+    if len(memo) > _MEMO_MAX:
+        memo.clear()
+
+    def miss(c):
+        k = memo[c] = canonical(c)
+        return k
+    return "\x1f".join([memo[c] if c in memo else miss(c)
+                        for j, c in enumerate(cells) if j not in marked])
 
 
 def _fixed(q: int, d: int) -> str:
@@ -209,14 +228,15 @@ def mark_text(text: str) -> str:
         return text
     optical = any(n in OPTICAL_COLUMNS for n in header)
     rows = [(i, c) for i, c in rows if len(c) == len(header) and '"' not in lines[i]]
-    decimals = {j: column_decimals(name, [_value(c[j]) for _, c in rows])
-                for j, name in cols.items()}
+    values = {j: [_value(c[j]) for _, c in rows] for j in cols}
+    decimals = {j: column_decimals(name, values[j]) for j, name in cols.items()}
     marked = set(cols)
-    for i, cells in rows:
-        ctx = _context(cells, marked)
+    memo: dict[str, str] = {}
+    for r, (i, cells) in enumerate(rows):
+        ctx = _context(cells, marked, memo)
         for j, name in cols.items():
             d = decimals[j]
-            v = _value(cells[j])
+            v = values[j][r]            # _value(cells[j]): no cell is rewritten before its own
             if d <= 0 or v is None:
                 continue
             q = _q(v, d)
@@ -283,11 +303,12 @@ class _Tally:
         self.seen: set[tuple[str, str]] = set()
         self.cells: list[tuple[str, str, Decimal]] = []
         self.rows = 0
+        self.memo: dict[str, str] = {}
 
     def add(self, cells) -> bool:
         """Take one row's cells; False once enough are read."""
         self.rows += 1
-        ctx = _context(cells, self.cols)
+        ctx = _context(cells, self.cols, self.memo)
         for j, name in self.cols.items():
             v = _value(cells[j])
             if v is None or (name, ctx) in self.seen:

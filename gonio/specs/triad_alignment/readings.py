@@ -24,9 +24,12 @@ Normalised columns of :attr:`TriadReadings.data`: the :data:`COLUMNS`, numbers a
 
 from __future__ import annotations
 
+import copy
 import csv
 import io
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -132,9 +135,37 @@ def _check_number(meta: dict, key: str, ok, expect: str, file) -> None:
         raise GonioError(f"expected {expect}, got {meta[key]!r}", file=file, key=key)
 
 
+#: The last few files parsed, {file: (text, TriadReadings)}: a calibration reads its
+#: readings and thermal programme once to screen them and again to calibrate them.
+_PARSED: OrderedDict[str, tuple[str, TriadReadings]] = OrderedDict()
+_PARSED_MAX = 4
+_PARSED_LOCK = threading.Lock()
+
+
+def _copy(r: TriadReadings) -> TriadReadings:
+    return TriadReadings(r.data.copy(deep=True), copy.deepcopy(r.metadata), r.path)
+
+
 def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReadings:
-    """Parse and validate the text of a triad readings file (see the module docstring)."""
+    """Parse and validate the text of a triad readings file (see the module docstring).
+    The same text of the same file parsed again is the last parse's copy (the same
+    values; a text that differs by one character is parsed afresh); each caller gets its
+    own copy to change."""
     file = str(path)
+    with _PARSED_LOCK:
+        hit = _PARSED.get(file)
+    if hit is not None and hit[0] == text:
+        return _copy(hit[1])
+    r = _parse_triad_readings(text, file)
+    with _PARSED_LOCK:
+        _PARSED[file] = (text, r)
+        _PARSED.move_to_end(file)
+        while len(_PARSED) > _PARSED_MAX:
+            _PARSED.popitem(last=False)
+    return _copy(r)
+
+
+def _parse_triad_readings(text: str, file: str) -> TriadReadings:
     lines = text.splitlines()
     meta, i = metadata_block(lines, file)
     if i >= len(lines):
