@@ -68,15 +68,16 @@ def small_ogam_bench():
 
 
 def plant_71_counts(readings, out, counts: int, stop_deg: float = 60.0, series: int = 1,
-                    rate: str = "60.0", orientation: str = "up"):
+                    rate: str = "60.0", orientation: str = "up", test: str = "scale_factor"):
     """A copy of the optical readings file ``readings`` at ``out`` (folders made) with
-    ``counts`` added to ``gyro_counts`` of the 7.1 (``scale_factor``) reading of ``series``
-    at ``rate`` and ``orientation`` whose ``table_deg`` is ``stop_deg``: a typo of
-    3600 · ``counts`` / K ″ in one reading. Returns (the reading's 1-based line number, out)."""
+    ``counts`` added to ``gyro_counts`` of the ``test`` reading (7.1, ``scale_factor``, unless
+    told) of ``series`` at ``rate`` and ``orientation`` whose ``table_deg`` is ``stop_deg``: a
+    typo of 3600 · ``counts`` / K ″ in one reading. Returns (the reading's 1-based line number,
+    out)."""
     readings, out = Path(readings), Path(out)
     lines = readings.read_text().splitlines(keepends=True)
     i = next(n for n, ln in enumerate(lines)
-             if (p := ln.split(","))[0] == "scale_factor" and len(p) > 7
+             if (p := ln.split(","))[0] == test and len(p) > 7
              and p[1] == str(series) and p[3] == rate and p[4] == orientation
              and float(p[6]) == float(stop_deg))
     p = lines[i].rstrip("\n").split(",")

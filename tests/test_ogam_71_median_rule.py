@@ -85,7 +85,8 @@ def test_typos_under_the_floor_pass_and_the_certificate_states_what_could_not_be
         rc, err = _calibrate(files[name], out / f"o_{name}", capsys)
         assert rc == 0, err
         res[name] = json.loads((out / f"o_{name}" / "results.json").read_text())
-        fl = [f for f in res[name]["findings"] if f["code"] == "readings-not-judged"]
+        fl = [f for f in res[name]["findings"] if f["code"] == "readings-not-judged"
+              and f["clause"] == "7.1"]   # 7.6 and 7.7: test_ogam_consistency_median_rule
         assert len(fl) == 1 and fl[0]["action"] == "flagged" and fl[0]["clause"] == "7.1"
         assert [f for f in res[name]["findings"] if f["action"] != "flagged"] == []
         m = STATED.search(fl[0]["message"])

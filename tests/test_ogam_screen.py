@@ -76,18 +76,21 @@ def run_cli(f: Path, out: Path, capsys, lang="en"):
 
 
 def judged(found):
-    """The findings less the statement of what the median rule could not see in the small
-    programme's three 7.1 readings (a flagged ``readings-not-judged``, on every file of it:
-    tests/test_ogam_71_median_rule.py)."""
-    return [f for f in found if not (f.code == "readings-not-judged" and f.clause == "7.1")]
+    """The findings less the statements of what the median rule could not see in the small
+    programme's three 7.1 readings and four of 7.6 and 7.7 (flagged ``readings-not-judged``,
+    on every file of it: tests/test_ogam_71_median_rule.py,
+    tests/test_ogam_consistency_median_rule.py)."""
+    return [f for f in found if not (f.code == "readings-not-judged"
+                                     and f.clause in ("7.1", "7.6", "7.7"))]
 
 
 def test_clean_bench_file_has_no_finding(bench_file):
-    """Nothing set aside or refused; the one finding states what the median rule, which
-    alone judges this programme's three 7.1 readings, could not have seen."""
+    """Nothing set aside or refused; the three findings state what the median rule, which
+    alone judges this programme's three 7.1 readings and four at 7.6's 30 °/s and 7.7's
+    north, could not have seen (tests/test_ogam_consistency_median_rule.py)."""
     found = screen(read_readings(bench_file), load_protocol(SMALL))
     assert [(f.code, f.action, f.clause) for f in found] == [
-        ("readings-not-judged", "flagged", "7.1")]
+        ("readings-not-judged", "flagged", c) for c in ("7.1", "7.6", "7.7")]
 
 
 @pytest.mark.parametrize("seed", [1, 7])
@@ -211,6 +214,8 @@ def test_a_missing_7_1_round_is_named(bench_file):
     found = screen(Readings(keep, rd.metadata, rd.path), load_protocol(SMALL))
     # and the two readings left are stated as judged by no rule (the median rule needs 3)
     assert [(x.code, x.clause) for x in found] == [("readings-not-judged", "7.1"),
+                                                  ("readings-not-judged", "7.6"),
+                                                  ("readings-not-judged", "7.7"),
                                                   ("incomplete-programme", "7.1")]
     lines = keep.loc[keep["test"] == "scale_factor", "line"].astype(int).tolist()
     assert f"lines {lines[0]}, {lines[1]} judged by no rule (2 readings" in found[0].message

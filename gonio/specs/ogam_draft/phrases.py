@@ -206,6 +206,21 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "两个及以上会相互掩盖，并被当作非线性度（K_l）并计入 E"),
     (r"(\w+) at (\S+) °/s, axis (\w+): readings? at lines? (.+?) judged by no rule \((\d+) "
      r"readings?; the median rule needs 3\): a typo of any size in one of them would not have "
+     r"been seen; each ″ of it moves (C_\w) \((\S+)\) by up to (\S+) (ppm|%) \(line (\d+)\), "
+     r"and by up to (\S+) (?:ppm|%) more where it changes the sign of the condition's extreme E",
+     "{1}，{2} °/s，{3}轴：第 {4} 行的读数未经任何规则判别（{5} 个读数；中位数规则至少需要 3 个）："
+     "其中一个读数无论多大的录入错误都无法被发现；该错误每 1″ 使 {6}（{7}）最多改变 {8} {9}"
+     "（第 {10} 行），若使该条件极值 E 的符号改变，最多再改变 {11} {9}"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): readings at lines (.+?) judged only by the median rule "
+     r"\(fewer than (\d+) readings; its floor (\S+)″, widened by the readings' own spread\): a "
+     r"typo in one of them of up to (\S+)″ \(line (\d+), (\S+)°\) would not have been seen; it "
+     r"would move E at its position by up to (\S+)″ and (C_\w) \((\S+)\) by up to (\S+) "
+     r"(ppm|%)",
+     "{1}，{2} °/s，{3}轴：第 {4} 行的读数仅按中位数规则判别（读数少于 {5} 个；其下限 {6}″，"
+     "随读数自身的分散而加宽）：其中一个读数若有不超过 {7}″ 的录入错误（第 {8} 行，{9}°）将"
+     "无法被发现；它会使该位置的 E 最多改变 {10}″，{11}（{12}）最多改变 {13} {14}"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): readings? at lines? (.+?) judged by no rule \((\d+) "
+     r"readings?; the median rule needs 3\): a typo of any size in one of them would not have "
      r"been seen; each ″ of it moves K by up to (\S+) ppm and K_l by up to (\S+) % \(line "
      r"(\d+), (\S+)°\), and E and every item computed with K with them",
      "{1}，{2} °/s，{3}轴：第 {4} 行的读数未经任何规则判别（{5} 个读数；中位数规则至少需要 3 个）："

@@ -45,10 +45,12 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
     ``AGREEMENT_SERIES_MIN`` series (an F test; refused naming them), or named in a flagged
     ``readings-not-judged`` finding where no such rounds exist (:func:`reference_agreement`);
   * fewer readings: ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``;
-    a 7.1 so judged gets a flagged ``readings-not-judged`` finding stating the largest typo
-    in one reading the rule would not have seen and its effect on K and K_l
-    (:func:`median_rule_limit`); a 7.1 of fewer than 3 readings, which no rule judges, one
-    saying so with a typo's effect per ″ (:func:`no_rule_statement`).
+    a 7.1, 7.6 or 7.7 condition so judged gets a flagged ``readings-not-judged`` finding
+    stating the largest typo in one reading the rule would not have seen and its effect on
+    K and K_l (7.1) or on C_v / C_g (7.6, 7.7: :class:`ConsistencyEffect`, from the item's
+    formula on the readings as read) (:func:`median_rule_limit`); one of fewer than 3
+    readings, which no rule judges, one saying so with a typo's effect per ″
+    (:func:`no_rule_statement`).
 - **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
   against the median of its series: the accumulated angle of a clean rest drifts (bias,
   warm-up, bias instability), so over the 70 min of 7.3 its readings spread beyond the
@@ -801,10 +803,8 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
                         & (rot["orientation"] == key[2])]
             out += reference_agreement(g, ref74, it, what, file, step, alpha,
                                        {f.line for f in found})
-        elif key[0] in ROUND_MAY_GO and how == "median" and len(g) >= 3 and not found:
-            out.append(median_rule_limit(g, key[0], what))
-        elif key[0] in ROUND_MAY_GO and how == "median" and len(g) < 3:
-            out.append(no_rule_statement(g, key[0], what))
+        elif key[0] in ROUND_MAY_GO + COMPARED and how == "median" and not found:
+            out += _unjudged_statement(g, key[0], what, work, protocol, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         what = f"zero_stability series {int(se)}"
         if len(g) < ZS_NEIGHBOUR_MIN:
@@ -813,6 +813,21 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set,
             out += _rest_outliers(g, what, file, k_ref, _resolution_arcsec(g, k_ref, deg_step),
                                   drift_rate)
     return out
+
+
+def _unjudged_statement(g: pd.DataFrame, test: str, what: str, work: pd.DataFrame, protocol,
+                        k_ref) -> list[Finding]:
+    """The flagged statement of a 7.1, 7.6 or 7.7 condition the median rule alone judges
+    (:func:`median_rule_limit`) or no rule (fewer than 3 readings, :func:`no_rule_statement`);
+    none for a 7.6/7.7 condition whose item is not measured from the readings."""
+    effect = None
+    if test in COMPARED:
+        effect = consistency_effect(work, protocol, test, k_ref)
+        if effect is None:
+            return []
+    if len(g) >= 3:
+        return [median_rule_limit(g, test, what, effect)]
+    return [no_rule_statement(g, test, what, effect)]
 
 
 def median_rule_blind_arcsec(r_arcsec) -> np.ndarray:
@@ -856,41 +871,205 @@ def median_rule_blind_arcsec(r_arcsec) -> np.ndarray:
     return out
 
 
-def median_rule_limit(g: pd.DataFrame, test: str, what: str) -> Finding:
-    """A flagged finding for 7.1 readings judged only by the median rule (fewer than
-    ``LINE_MIN`` readings, e.g. 7.1 at three stops): the size of a typo in one of them the
-    rule could not have seen (:func:`median_rule_blind_arcsec`, the largest over the
-    readings) and what it would do to K and K_l.
+def ceil_sig(x: float, digits: int = 2) -> str:
+    """``x`` > 0 to ``digits`` significant digits, rounded up (a stated bound never below
+    what it bounds); "0" for x ≤ 0.
+
+    >>> ceil_sig(4.07), ceil_sig(0.000398), ceil_sig(11.3), ceil_sig(5.351, 3)
+    ('4.1', '0.00040', '12', '5.36')
+    """
+    if not x > 0:
+        return "0"
+    e = math.floor(math.log10(x)) - (digits - 1)
+    v = math.ceil(round(x * 10.0 ** -e, 9)) * 10.0 ** e
+    return f"{v:.{max(0, -e)}f}"
+
+
+class ScaleFactorEffect:
+    """What a typo in one 7.1 reading does (the default ``effect`` of :func:`median_rule_limit`
+    and :func:`no_rule_statement`): it moves K_i = C_i/θ_i by t/θ_i, K (the mean of the m
+    K_i) by t/(θ_i · m) and K_l (their range) by up to t/θ_i, and through K every item
+    computed with it (E at 360° by 360° · ΔK/K)."""
+
+    def bounded(self, g: pd.DataFrame, t_arcsec: np.ndarray) -> tuple[str, str]:
+        """The effect of a typo of up to ``t_arcsec`` (one per reading of ``g``): (the
+        sentence, the rule)."""
+        theta = np.abs(g["table_deg"].to_numpy(float))
+        rel = t_arcsec / np.where(theta > 0, deg_to_arcsec(theta), np.inf)
+        return (f"it would move K by up to {float(np.max(rel)) / len(g) * 1e6:.2g} ppm and K_l "
+                f"by up to {float(np.max(rel)) * 100.0:.2g} %, and E and every item computed "
+                "with K with them", _MEDIAN_LIMIT_RULE)
+
+    def per_arcsec(self, g: pd.DataFrame) -> tuple[int, str, str]:
+        """The effect of each ″ of typo at the reading of ``g`` where it is largest (the
+        smallest stop): (its position in ``g``, the sentence, the rule)."""
+        theta = np.abs(g["table_deg"].to_numpy(float))
+        rel = 1.0 / np.where(theta > 0, deg_to_arcsec(theta), np.nan)
+        i = int(np.nanargmax(rel)) if np.isfinite(rel).any() else 0
+        line = int(g["line"].iloc[i])
+        return i, (f"each ″ of it moves K by up to {float(rel[i]) / len(g) * 1e6:.2g} ppm and "
+                   f"K_l by up to {float(rel[i]) * 100.0:.2g} % (line {line}, {theta[i]:g}°), "
+                   "and E and every item computed with K with them"), _NO_RULE
+
+
+class ConsistencyEffect:
+    """What a typo in one 7.6 or 7.7 reading does to C_v or C_g, from the item's own
+    formula on the readings as read (:func:`consistency_effect`): the typo u moves the mean
+    E of its position at its condition by u/n (n the series that read that round there),
+    E_v (the signed extreme of the condition's points, 7.4) with it, and C = (max E_v −
+    min E_v) / the reference angle (the reference's indicated angle at its largest
+    position, moved too where the typo is there)."""
+
+    def __init__(self, item, test: str):
+        pts = item.tables["points"]
+        self.col = "rate_dps" if test == "rate_consistency" else "orientation"
+        self.symbol, self.unit = (("C_v", "ppm") if test == "rate_consistency" else ("C_g", "%"))
+        self.scale = 1e6 if test == "rate_consistency" else 100.0
+        self.clause = CLAUSES[test]
+        self.conds = list(item.table[self.col])
+        self.ref = int(np.flatnonzero(item.table["reference"].to_numpy(bool))[0])
+        self.src = list(item.table["source_test"])
+        key = pts["position_deg"].round(6)
+        self.positions = sorted(set(key))
+        shape = (len(self.conds), len(self.positions))
+        self.e, self.n, self.cell = np.full(shape, np.nan), np.ones(shape), {}
+        for row, x in zip(pts.itertuples(index=False), key):
+            a, b = self.conds.index(getattr(row, self.col)), self.positions.index(x)
+            self.e[a, b], self.n[a, b] = row.E_arcsec, row.n_series
+            self.cell[(a, row.round)] = b
+        self.angle = float(item.details["reference_angle_arcsec"])
+        self.ref_pos = self.positions.index(max(self.positions))
+        self.test = test
+
+    def _cell(self, row) -> tuple[int, int] | None:
+        """The (condition, position) of one reading of the screen's group, None where the
+        item does not use it (another fixed condition, a position not compared)."""
+        v = float(row["rate_dps"]) if self.col == "rate_dps" else row["orientation"]
+        a = next((j for j, c in enumerate(self.conds) if (math.isclose(float(c), v)
+                  if self.col == "rate_dps" else c == v) and self.src[j] == self.test), None)
+        b = None if a is None else self.cell.get((a, row["round"]))
+        return None if b is None or not np.isfinite(self.e[a, b]) else (a, b)
+
+    def shift(self, a: int, b: int, u: np.ndarray) -> np.ndarray:
+        """|ΔC| (in the item's unit) for typos ``u`` ″ on a reading of cell (a, b)."""
+        e_v = np.array([float(x[np.nanargmax(np.abs(x))]) for x in self.e])
+        row = np.where(np.isfinite(self.e[a]), self.e[a], 0.0)[None, :].repeat(u.size, 0)
+        row[:, b] += u / self.n[a, b]
+        ev = row[np.arange(u.size), np.argmax(np.abs(row), axis=1)]
+        others = np.delete(e_v, a)
+        spread = np.maximum(ev, others.max()) - np.minimum(ev, others.min())
+        ang = self.angle + (u / self.n[a, b] if (a, b) == (self.ref, self.ref_pos) else 0.0)
+        return np.abs(spread / ang - (e_v.max() - e_v.min()) / self.angle) * self.scale
+
+    def bounded(self, g: pd.DataFrame, t_arcsec: np.ndarray) -> tuple[str, str]:
+        """As :meth:`ScaleFactorEffect.bounded`: the largest |ΔC| over typos |u| ≤ t of each
+        reading, on a grid of 2 000 steps plus the most a step can hide (slope 1/n)."""
+        worst, e_pos = 0.0, 0.0
+        for k in range(len(g)):
+            cell = self._cell(g.iloc[k])
+            if cell is None or not t_arcsec[k] > 0:
+                continue
+            u = np.linspace(-t_arcsec[k], t_arcsec[k], 2001)
+            step = float(u[1] - u[0]) / self.n[cell] / self.angle * self.scale
+            worst = max(worst, float(self.shift(*cell, u).max()) + step)
+            e_pos = max(e_pos, float(t_arcsec[k]) / self.n[cell])
+        return (f"it would move E at its position by up to {ceil_sig(e_pos, 3)}″ and "
+                f"{self.symbol} ({self.clause}) by up to {ceil_sig(worst)} {self.unit}",
+                _consistency_rule(self))
+
+    def per_arcsec(self, g: pd.DataFrame) -> tuple[int, str, str]:
+        """As :meth:`ScaleFactorEffect.per_arcsec`: 1/(n · reference angle) a ″, and at most
+        the condition's own range more where the typo changes the sign of its extreme."""
+        best = (0, 0.0, 0.0)
+        for k in range(len(g)):
+            cell = self._cell(g.iloc[k])
+            if cell is not None:
+                x = self.e[cell[0]]
+                slope = self.scale / (self.n[cell] * self.angle)
+                jump = float(np.nanmax(x) - np.nanmin(x)) / self.angle * self.scale
+                best = max(best, (k, slope, jump), key=lambda b: (b[1], b[2]))
+        k, slope, jump = best
+        return k, (f"each ″ of it moves {self.symbol} ({self.clause}) by up to "
+                   f"{ceil_sig(slope)} {self.unit} (line {int(g['line'].iloc[k])}), and by up "
+                   f"to {ceil_sig(jump)} "
+                   f"{self.unit} more where it changes the sign of the condition's extreme E"),\
+            _consistency_rule(self, per_arcsec=True)
+
+
+def _consistency_rule(eff: ConsistencyEffect, per_arcsec: bool = False) -> str:
+    """The rule text of a 7.6/7.7 ``readings-not-judged`` finding."""
+    head = (f"{eff.clause} condition of fewer than {LINE_MIN} readings: the median rule "
+            f"(|r − median| > max({ROBUST_Z:g} · 1.4826 · MAD, {ANGLE_FLOOR_ARCSEC:g}″)); "
+            "stated: the largest typo t in one reading with which that rule finds nothing "
+            "(searched on the readings as read), and the largest change of ")
+    if per_arcsec:
+        head = (f"{eff.clause} condition of fewer than 3 readings: no rule judges them; "
+                "stated: per ″ of typo, the change of ")
+    return head + (f"{eff.symbol} = (max E − min E) / reference angle it makes, E of its "
+                   "position moved by t / n (n series), each E the signed extreme of its "
+                   "condition's points (7.4), K of 7.1")
+
+
+def consistency_effect(df: pd.DataFrame, protocol, test: str, k_ref) -> ConsistencyEffect | None:
+    """The 7.6 (``rate_consistency``) or 7.7 item computed on the readings ``df`` as read,
+    as :mod:`items` computes it (K of 7.1, else ``k_ref``), for :class:`ConsistencyEffect`;
+    None where the item is not measured from them (nothing to state an effect on)."""
+    from gonio.specs.ogam_draft import items
+
+    k = k_ref
+    try:
+        sf = items.scale_factor(df)
+        k = sf.value if sf.measured else k_ref
+    except GonioError:
+        pass
+    func = items.rate_consistency if test == "rate_consistency" else items.pointing_consistency
+    try:
+        item = func(df, k, reference_rate_dps=float(getattr(protocol, "rate_reference_dps", 60.0)),
+                    reference_orientation=getattr(protocol, "pointing_reference", "up"))
+    except GonioError:
+        return None
+    if not item.measured or not math.isfinite(item.value or math.nan):
+        return None
+    return ConsistencyEffect(item, test)
+
+
+def median_rule_limit(g: pd.DataFrame, test: str, what: str, effect=None) -> Finding:
+    """A flagged finding for readings judged only by the median rule (fewer than
+    ``LINE_MIN`` readings, e.g. 7.1 at three stops, 7.6 or 7.7 at four positions): the size
+    of a typo in one of them the rule could not have seen (:func:`median_rule_blind_arcsec`,
+    the largest over the readings) and what it would do to the item: ``effect``
+    (:class:`ScaleFactorEffect`, the default, for 7.1: K and K_l; :class:`ConsistencyEffect`
+    for 7.6 and 7.7: C_v or C_g).
 
     Why. The median rule's floor (``ANGLE_FLOOR_ARCSEC``) sits far above a healthy
     reading's spread, so a typo below it passes, and in 7.1 a typo in one reading is
     indistinguishable from a nonlinearity at that stop: it moves K_i = C_i/θ_i by
     t/θ_i, K (the mean of the m K_i) by t/(θ_i · m) and K_l (their range) by up to
     t/θ_i, and through K every item computed with it (E at 360° by 360° · ΔK/K: a 3″
-    typo at 120° of three stops moves E by 3″). Where 7.4 reads 7.1's stops at its rate
-    and axis in several series, :func:`reference_agreement` judges them (the condition
-    rule's groups); a median-rule group gets this statement instead (docs/draft-readings.md,
-    "7.1 without a repeated reference")."""
+    typo at 120° of three stops moves E by 3″); in 7.6 and 7.7 it moves the E of its
+    condition, so C_v or C_g (a 4″ typo at 90° of 30 °/s in the small programme: C_v
+    0.39 → 3.5 ppm). Where 7.4 reads 7.1's stops at its rate and axis in several series,
+    :func:`reference_agreement` judges them (the condition rule's groups); a median-rule
+    group gets this statement instead (docs/draft-readings.md, "7.1 without a repeated
+    reference", "7.6 and 7.7 judged by the median rule")."""
+    effect = effect or ScaleFactorEffect()
     r = g["_r"].to_numpy(float)
     theta = np.abs(g["table_deg"].to_numpy(float))
     lines = g["line"].astype(int).tolist()
     t = median_rule_blind_arcsec(r)
     i = int(np.argmax(t))
-    rel = t / np.where(theta > 0, deg_to_arcsec(theta), np.inf)
-    k_ppm = float(np.max(rel)) / len(r) * 1e6
-    kl_pct = float(np.max(rel)) * 100.0
+    tail, rule = effect.bounded(g, t)
     return Finding(
         "readings-not-judged",
         f"{what}: readings at lines {', '.join(map(str, lines))} judged only by the median "
         f"rule (fewer than {LINE_MIN} readings; its floor {ANGLE_FLOOR_ARCSEC:g}″, widened "
         f"by the readings' own spread): a typo in one of them of up to "
         f"{math.ceil(float(t[i]) * 100.0) / 100.0:.2f}″ (line {lines[i]}, {theta[i]:g}°) "
-        f"would not have been seen; it would move K by up to {k_ppm:.2g} ppm and K_l by up "
-        f"to {kl_pct:.2g} %, and E and every item computed with K with them", "flagged",
+        f"would not have been seen; {tail}", "flagged",
         # no path: a statement on every file of such a programme, so outputs stay the same
         # wherever the readings lie (results.json's inputs name the readings file)
         file=None, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
-        clause=CLAUSES[test], rule=_MEDIAN_LIMIT_RULE)
+        clause=CLAUSES[test], rule=rule)
 
 
 _MEDIAN_LIMIT_RULE = (
@@ -900,36 +1079,32 @@ _MEDIAN_LIMIT_RULE = (
     "t / θ / m (K) and t / θ (K_l) at its stop")
 
 
-def no_rule_statement(g: pd.DataFrame, test: str, what: str) -> Finding:
-    """A flagged ``readings-not-judged`` finding for 7.1 readings no screening rule judges:
+def no_rule_statement(g: pd.DataFrame, test: str, what: str, effect=None) -> Finding:
+    """A flagged ``readings-not-judged`` finding for readings no screening rule judges:
     fewer than 3 (a programme of two stops, or three with one missing or set aside by
-    another rule). It names them and states what a typo t″ in one of them does, per ″ at the
-    smallest stop: K by t/(θ · m) (ppm), K_l by up to t/θ (%).
+    another rule). It names them and states what a typo t″ in one of them does, per ″
+    (``effect``, as :func:`median_rule_limit`): for 7.1 at the smallest stop K by
+    t/(θ · m) (ppm), K_l by up to t/θ (%); for 7.6 and 7.7 C_v or C_g.
 
     Why. The median rule (:func:`_outliers`) cannot judge two readings: each departs from
     their median by half their difference, which the MAD (the same half) times
     ``ROBUST_Z`` · 1.4826 always exceeds, so it is not run (:func:`_group_outliers`), and
-    no other rule sees a 7.1 reading; the size of a typo it would miss is unbounded, so
+    no other rule sees such a reading; the size of a typo it would miss is unbounded, so
     the finding states the effect per ″ instead of a size (docs/draft-readings.md, "7.1
     judged by no rule")."""
-    theta = np.abs(g["table_deg"].to_numpy(float))
+    effect = effect or ScaleFactorEffect()
     lines = g["line"].astype(int).tolist()
     m = len(lines)
-    rel = 1.0 / np.where(theta > 0, deg_to_arcsec(theta), np.nan)
-    i = int(np.nanargmax(rel)) if np.isfinite(rel).any() else 0
-    k_ppm = float(rel[i]) / m * 1e6
-    kl_pct = float(rel[i]) * 100.0
+    i, tail, rule = effect.per_arcsec(g)
     word = "reading" if m == 1 else "readings"
     return Finding(
         "readings-not-judged",
         f"{what}: {word} at {'line' if m == 1 else 'lines'} {', '.join(map(str, lines))} "
         f"judged by no rule ({m} {word}; the median rule needs 3): a typo of any size in "
-        f"one of them would not have been seen; each ″ of it moves K by up to "
-        f"{k_ppm:.2g} ppm and K_l by up to {kl_pct:.2g} % (line {lines[i]}, {theta[i]:g}°), "
-        f"and E and every item computed with K with them", "flagged",
+        f"one of them would not have been seen; {tail}", "flagged",
         # no path: a statement on every file of such a programme (median_rule_limit)
         file=None, line=lines[i], column=str(g["_col"].iloc[i]), test=test,
-        clause=CLAUSES[test], rule=_NO_RULE)
+        clause=CLAUSES[test], rule=rule)
 
 
 _NO_RULE = (
