@@ -11,6 +11,10 @@ squares), and the in-situ tilt estimates of the two files within theirs. Prints 
 and the tables.
 
     python benchmarks/acquire_resume_draft.py [--speed 200] [--seed 1] [--stop-after 140]
+        [--protocol FILE]
+
+``--protocol`` (default ``protocols/ogam-draft.toml``) takes another protocol of the draft
+through the same path (tests/test_instruments_whole_draft.py: the draft with shorter rests).
 
 ``--stop-after`` counts the readings the module answers, the static phases' among them (the
 rows kept are fewer: 140 answered readings are 129 rows where none was taken again). The draft's programme (with
@@ -18,7 +22,7 @@ the built-in tilt estimate's rests) is about 8.5 h of bench time: at ``--speed 2
 2–3 min per pass on a loaded 2-core machine, at ``--speed 1000`` about 15 s. The speed is
 bounded by the host's latency: a reply that takes 30 ms of real time is 30 s of bench time at
 ``--speed 1000``, the whole of Annex A.1's 0.5 min. tests/test_instruments_whole_draft.py
-runs this script at ``--speed 250``; tests/test_instruments.py runs the same path on the
+runs this script at ``--speed 250`` (with ``--protocol``); tests/test_instruments.py runs the same path on the
 small programme.
 
 Every ``gonio`` process it starts dies with it: each is asked (Linux ``prctl``
@@ -154,6 +158,8 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--stop-after", type=int, default=140)
     ap.add_argument("--latitude", default="40.2")
+    ap.add_argument("--protocol", type=Path, default=PROTOCOL,
+                    help="the protocol acquired, simulated and calibrated (default: the draft)")
     ap.add_argument("--dir", type=Path, default=None,
                     help="folder for the files (default: a new temporary folder)")
     a = ap.parse_args()
@@ -169,7 +175,7 @@ def main() -> int:
         if None in said:
             sys.exit(f"gonio bench serve did not start: {said}")
         res = dict(ln.split(": ", 1) for ln in said)
-        args = ["acquire", "--protocol", str(PROTOCOL), "--table", res["table"], "--gyro",
+        args = ["acquire", "--protocol", str(a.protocol), "--table", res["table"], "--gyro",
                 res["gyro"], "--out", str(d / "acq"), "--meta", f"latitude_deg={a.latitude}"]
         t0 = time.monotonic()
         p = gonio(*args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -195,11 +201,11 @@ def main() -> int:
               f"header '{(d / 'acq' / 'readings.csv').read_text().splitlines()[0]}'")
     finally:
         stop(srv)
-    run("simulate", "--protocol", str(PROTOCOL), "--bench", "rlg", "--seed", str(a.seed),
+    run("simulate", "--protocol", str(a.protocol), "--bench", "rlg", "--seed", str(a.seed),
         "--out", str(d / "sim"))
     print(f"simulated: {rows(d / 'sim' / 'readings.csv')} readings")
     for name in ("acq", "sim"):
-        run("calibrate", str(d / name / "readings.csv"), "--protocol", str(PROTOCOL), "--out",
+        run("calibrate", str(d / name / "readings.csv"), "--protocol", str(a.protocol), "--out",
             str(d / f"cal-{name}"))
     ia, isim = items(d / "cal-acq"), items(d / "cal-sim")
     bad = 0
