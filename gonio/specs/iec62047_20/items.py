@@ -1043,7 +1043,16 @@ def arw(ctx: Context) -> Item:
     χ² 95 % interval alone (:func:`arw_uncertainty`): the line reading's spread from the
     equivalent degrees of freedom of its Allan variances under the five-term model fitted to
     the same record (:func:`arw_line_edf`; the noise types the fit assumes, not those
-    identified τ by τ), and the correction (half its size, normal); no k, no "± U"."""
+    identified τ by τ), and the correction's model (the band-limited against the five-term
+    factor, rectangular); no k, no "± U".
+
+    The line's τ range is 5.4.5.2 e)'s reading taken (from the shortest τ to the first whose
+    local slope leaves −½ ± 0.05) applied to the fitted model's curve, not to the data
+    (:func:`arw_reading`): on the data the range ends where the record's own scatter first
+    flattens a slope, so the points kept are those the scatter lowered, and the line read
+    low (−0.06 % on the built-in record, docs/iec62047-20-readings.md). The standard's
+    reading — the range the data's slope gives, no lift correction — is given beside
+    (``standard_reading``), not certified."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
     m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
@@ -1054,13 +1063,25 @@ def arw(ctx: Context) -> Item:
     value, val, ratio, u_rel, mask = arw_reading(allan, shaped)
     midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     edf = arw_line_edf(allan, mask, fit)
-    u = arw_uncertainty(value, ratio, edf)
+    ratio_five_same = arw_lift_factor(allan.tau_s, mask, fit)
+    u = arw_uncertainty(value, ratio, edf, ratio_five_same)
+    std_val, std_mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
         "line_edf": edf,
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
+        "standard_line_tau_s": allan.tau_s[std_mask],
+        "standard_reading": standard_reading_beside(
+            "5.4.5.2", std_val, " °/√h",
+            ("the standard's reading, the −½ line over the short-τ range the data's own "
+             "slope gives, read at 1 h, {v}",
+             "the line over the range the fitted noise model's slope gives, divided by "
+             "the model's lift factor"),
+            ("标准的读数（由数据自身斜率确定的短 τ 区间内斜率 −½ 的直线，在 1 小时处读取）{v}",
+             "由拟合噪声模型的斜率确定区间的直线读数，除以模型的抬升因子")),
         "flicker_band_t_lo_s": shaped.t_lo_s,
         "five_term_line_bias_factor": ratio_five,
+        "five_term_lift_same_tau": ratio_five_same,
         "five_term_midpoint_reading": midpoint_five_term,
         "five_term_fit_arw": fit.N / math.sqrt(S_PER_H),
         "band_limited_fit_arw": shaped.N / math.sqrt(S_PER_H)})
@@ -1070,15 +1091,52 @@ def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
     """The ARW of :func:`arw` from an Allan deviation (°/h) and a fitted model (anything with
     ``N`` and ``adev(tau)``): (value °/√h = the −½ line reading / the model's lift factor,
     uncorrected −½ line reading, the lift factor N_line(model)/N_fit, relative u of the
-    line's points, mask of the τ used)."""
-    val, mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
+    line's points, mask of the τ used). The line's τ are those 5.4.5.2 e)'s rule
+    (:func:`gonio.specs.iec62047_20.formulas.arw_minus_half_line`) gives on the model's
+    curve (:func:`arw_model_range`), read on the data."""
+    model = fit.adev(allan.tau_s)
+    mask = arw_model_range(allan, model)
+    s = allan.adev[mask] * np.sqrt(allan.tau_s[mask])
+    val = math.exp(float(np.mean(np.log(s)))) / math.sqrt(S_PER_H)
     rel = np.abs(np.log(allan.ci_high[mask] / allan.adev[mask]))
     u_rel = float(np.sqrt(np.mean(rel ** 2)) / math.sqrt(mask.sum())) * 2.0   # correlated τ
-    model = fit.adev(allan.tau_s)
-    line_model = math.exp(float(np.mean(np.log(model[mask]) + 0.5 * np.log(allan.tau_s[mask])))) \
-        / math.sqrt(S_PER_H)
-    ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
+    ratio = arw_lift_factor(allan.tau_s, mask, fit)
     return val / ratio, val, ratio, u_rel, mask
+
+
+def arw_lift_factor(tau_s, mask, fit) -> float:
+    """The lift of the −½ line over the τ in ``mask`` under a fitted model (anything with
+    ``N`` and ``adev(tau)``): N_line(model)/N_fit, the geometric mean of σ_model(τ)·√τ over
+    those τ divided by the model's N (1 where the model has no N)."""
+    tau = np.asarray(tau_s, float)[mask]
+    model = np.asarray(fit.adev(tau), float)
+    if not (fit.N > 0) or not np.all(np.isfinite(model) & (model > 0)):
+        return 1.0
+    return math.exp(float(np.mean(np.log(model) + 0.5 * np.log(tau)))) / fit.N
+
+
+def arw_model_range(allan, model_adev) -> np.ndarray:
+    """The τ of the −½ line (mask over ``allan.tau_s``): 5.4.5.2 e)'s rule of
+    :func:`gonio.specs.iec62047_20.formulas.arw_minus_half_line` applied to a fitted model's
+    Allan deviation at the same τ, where the data are finite and positive. The rule on the
+    data ends the range at the first τ whose noisy local slope leaves −½ ± 0.05, an event
+    the scatter of the points kept helps trigger (a low σ̂ just before the end flattens the
+    slope there), so the kept points read low; the model's curve has no scatter. Where the
+    model has no −½ range (nothing fitted), the data's own range."""
+    ok = np.isfinite(allan.adev) & (allan.adev > 0)
+    m = np.asarray(model_adev, float)
+    good = ok & np.isfinite(m) & (m > 0)
+    if good.any():
+        idx = np.flatnonzero(good)
+        try:
+            _, sub = ief.arw_minus_half_line(allan.tau_s[idx], m[idx])
+        except GonioError:
+            sub = None
+        if sub is not None and sub.any():
+            mask = np.zeros(allan.tau_s.size, bool)
+            mask[idx[sub]] = True
+            return mask
+    return ief.arw_minus_half_line(allan.tau_s, allan.adev)[1]
 
 
 def arw_line_edf(allan, mask, fit) -> float:
@@ -1109,22 +1167,32 @@ def arw_line_edf(allan, mask, fit) -> float:
     return 2.0 / v if math.isfinite(v) and v > 0 else fallback
 
 
-def arw_uncertainty(value: float, ratio: float, edf: float) -> Uncertainty:
+def arw_uncertainty(value: float, ratio: float, edf: float,
+                    ratio_alt: float | None = None) -> Uncertainty:
     """The one statement of 5.4.5.2's ARW (:func:`arw`): a dispersion, stated as the noise rms
     is (:func:`gonio.result.gum.dispersion_uncertainty`), by its one-sided χ² 95 % interval
     [0, N·√(ν/χ²_0.05,ν)] with ν = ½(N/u_c)². The budget: the line reading, u = N/√(2·edf)
     with ν = edf (JCGM 100 E.4.3: the u of a standard deviation of edf degrees of freedom;
-    ``edf`` from :func:`arw_line_edf`), and the bias correction by the model's lift factor
-    ``ratio`` (half the correction, normal). Without the correction ν = edf and the upper
-    end is N·√(edf/χ²_0.05,edf), the χ² interval of the Allan deviations the line reads."""
+    ``edf`` from :func:`arw_line_edf`), and the lift correction's model: the correction by
+    the band-limited fit's factor ``ratio`` lies within the one by the five-term fit's
+    factor ``ratio_alt`` over the same τ (flat flicker, the most lift) of it, a rectangular
+    half-width |ratio/ratio_alt − 1| (JCGM 100 4.3.7); none where the two agree (the
+    band-limited fit fell back to the five-term one) or ``ratio_alt`` is None. The
+    correction's own scatter is not a further line: the fitted lift follows the record's
+    own bias instability, so the corrected value scatters less than the line (0.45 % against
+    the line's u 0.52 % on the built-in record). Without the correction ν = edf and the
+    upper end is N·√(edf/χ²_0.05,edf), the χ² interval of the Allan deviations the line
+    reads."""
     u_n = value / math.sqrt(2.0 * edf) if edf > 0 and math.isfinite(edf) else 0.0
+    alt = ratio if ratio_alt is None or not math.isfinite(ratio_alt) or ratio_alt <= 0 \
+        else ratio_alt
     u = gum(lambda n, c: n * (1 + c),
             [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
                     source="χ² of the −½ line's Allan variances: edf of the line reading "
                            "under the fitted five-term model"),
-             from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=DOF_U_WITHIN_10PCT,
-                    source="bias correction of the −½ line under the fitted model with "
-                           "band-limited flicker (half the correction)")])
+             type_b("corr", 0.0, abs(ratio / alt - 1.0), "rectangular",
+                    source="lift correction's model: band-limited against the five-term "
+                           "fit's factor over the same τ (bound)")])
     return dispersion_uncertainty(value, u)
 
 
