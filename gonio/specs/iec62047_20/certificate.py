@@ -194,6 +194,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "底值规则的分散性：五项拟合模型下 {1} 次定种子抽样（Allan 方差相关）的标准偏差"),
     (r"bias correction of the −½ line under the fitted model with band-limited flicker "
      r"\(half the correction\)", "带限闪烁噪声拟合模型下 −½ 斜率直线的偏差修正（取修正量的一半）"),
+    (r"lift correction's model: band-limited against the five-term fit's factor over the "
+     r"same τ \(bound\)", "抬升修正的模型：同一 τ 区间上带限闪烁拟合与五项拟合的抬升因子之差（界限）"),
     (r"time outside the band: the count's spread and the reference's error \(noise, bias "
      r"drift\) through the local slope",
      "带外时间：计数的分散性及参考值误差（噪声、零偏漂移）经局部斜率传递"),
