@@ -87,8 +87,12 @@ def test_chamber_deviation_at_t_base_in_a_base_and_bias(iec_noise_free):
     Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
                    if s["test"] == "bias_temperature"], float)
     b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
+    # the bias's bound takes β at its 95 % far end, |β| + U(β) of 5.3.3.6's own statement
+    # (the estimate alone is no bound); noise-free, the estimate is the polynomial's slope
+    bt = r.items["bias_temperature_coefficient"]
+    assert bt.value == pytest.approx(b_tc, rel=2e-2)
     assert _comp(r.items["bias"], "e_TU")["u"] == pytest.approx(
-        2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+        2.0 / math.sqrt(3) * (abs(b_tc) + bt.U), rel=2e-2)
     # both enter u_c: the scale factor's relative u_c holds the chamber term in quadrature
     sf = r.items["scale_factor"]
     others = [c["u"] for c in sf.uncertainty.components if c["symbol"] in ("e_table", "e_acq")]
@@ -178,9 +182,11 @@ def test_chamber_uniformity_in_the_bias(iec_noise_free):
     Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
                    if s["test"] == "bias_temperature"], float)
     b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
-    assert u0 == pytest.approx(2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+    reach0 = abs(b_tc) + r0.items["bias_temperature_coefficient"].U   # |β| + U(β), 5.3.3.6
+    reach = abs(b_tc) + r.items["bias_temperature_coefficient"].U
+    assert u0 == pytest.approx(2.0 / math.sqrt(3) * reach0, rel=2e-2)
     assert _comp(r.items["bias"], "e_TU")["u"] == pytest.approx(
-        (2.0 + 2.0) / math.sqrt(3) * abs(b_tc), rel=2e-2)
+        (2.0 + 2.0) / math.sqrt(3) * reach, rel=2e-2)
     assert r.items["bias"].uncertainty.u_c > r0.items["bias"].uncertainty.u_c
     assert r.items["initial_bias_variation"].uncertainty.u_c == r.items["bias"].uncertainty.u_c
 

@@ -240,3 +240,61 @@ def test_the_statement_function_is_first_order_exact():
     with pytest.raises(GonioError, match="no line 'e9'"):
         table_bound_statement(g, 2.0, None, {"e9": 1.0})
     assert np.isfinite(s.U)
+
+
+OMEGA_E_DPS = 360.0 / 86164.0989     # IEC 62047-20 5.3.3.1 (the sidereal day, read off the clause)
+
+
+@pytest.mark.parametrize("key", ["bias", "initial_bias_variation"])
+def test_iec_bias_statement_adds_its_bounds(iec, key):
+    """The 5.3.3.1 bias and 5.3.3.2: the gyro's temperature error at T_BASE (the chamber's
+    deviation bound + half its uniformity, × |β| + U(β) of 5.3.3.6's own statement), the
+    input axis's misalignment (the bench file's bound) on the horizontal Earth rate, and
+    a_BASE's bounded part (N_bias = (Out,ave − null)/a_BASE − Ω_E,proj: the reading taken
+    for eq. (24)) at their bounds with one sign, plus t_95(ν_rest)·u_rest of the other
+    lines. The quadrature k·u_c of the same lines covers less than 95 % with those errors
+    at their bounds (normal rest of u_rest); the statement covers ≥ 95 % there. Mutation
+    (the bias's statement returning the GUM budget) fails here."""
+    from gonio.formats.toml import read_toml
+    from gonio.resources import resolve
+
+    _, _, readings, truth, res = iec
+    it, b = res.items[key], res.items["bias"]
+    md = readings.metadata
+    bound_c = float(md["chamber_deviation_bound_c"]) + float(md["chamber_uniformity_c"]) / 2
+    bt = res.items["bias_temperature_coefficient"]
+    h_tu = bound_c * (abs(bt.value) + bt.U)
+    align = read_toml(resolve("mems-adxrs610", kind="bench"))["equipment"]["axis_alignment_bound_deg"]
+    lat = math.radians(float(md["latitude_deg"]))
+    h_al = OMEGA_E_DPS * math.cos(lat) * math.sin(math.radians(align))
+    sf = res.items["scale_factor"]
+    a_rel = sf.details["bound_condition"]["a"] / abs(sf.value)
+    out_rate = b.value + b.details["earth_component_dps"]     # (Out,ave − null)/a_BASE
+    shift = h_tu + h_al + abs(out_rate) * a_rel
+    rows = _rows(it)
+    assert rows["e_TU"]["u"] == pytest.approx(h_tu / math.sqrt(3), rel=1e-9)
+    assert rows["e_align"]["u"] == pytest.approx(h_al / math.sqrt(3), rel=1e-9)
+    # a_BASE's other lines: u_rest/a_BASE with ν_rest, sensitivity −(Out,ave − null)/a_BASE
+    assert rows["e_a"]["c"] == pytest.approx(-out_rate, rel=1e-4)
+    assert rows["e_a"]["u"] == pytest.approx(
+        sf.details["bound_condition"]["u_rest"] / abs(sf.value), rel=1e-12)
+    u_rest, nu_rest = _rest(it, ("e_TU", "e_align", "e_a_bnd"))
+    u = it.uncertainty
+    assert u.k is None and u.k_source.startswith(BOUND_PREFIX)
+    assert sorted(it.details["bound_condition"]["a_lines"]) == ["e_TU", "e_a_bnd", "e_align"]
+    assert u.U == pytest.approx(shift + _t95(nu_rest) * u_rest, rel=1e-3)
+    assert u.interval == pytest.approx((it.value - u.U, it.value + u.U), rel=1e-12)
+    assert u.nu_eff == pytest.approx(nu_rest, rel=1e-9)
+    # at the bound: P(|shift + e| ≤ U) with e = u_rest·t_ν (ν_rest), the rest's distribution
+    t_nu = stats.t(max(1, math.floor(nu_rest)))
+    cover = lambda half: float(t_nu.cdf((half - shift) / u_rest) - t_nu.cdf((-half - shift) / u_rest))
+    q = it.details["bound_condition"]["U_quadrature"]
+    assert cover(q) < 0.95 <= cover(u.U) + 1e-12
+    # this trial's truth (the chamber at its bound, the fixture at its bound) is inside
+    t = truth["items"][key]["value"]
+    assert u.interval[0] <= t <= u.interval[1]
+    if key == "initial_bias_variation":        # the bias's statement shifted by Out,typ
+        typ = it.details["nominal_bias_dps"]
+        assert u.U == pytest.approx(b.uncertainty.U, rel=1e-9)
+        assert u.interval == pytest.approx((b.uncertainty.interval[0] - typ,
+                                            b.uncertainty.interval[1] - typ), abs=1e-12)

@@ -229,6 +229,10 @@ LABELS: dict[str, dict[str, str]] = {
     "bound_line_e_table": {"en": "the rate table's error", "zh": "转台误差"},
     "bound_line_e_TU": {"en": "the gyro's temperature error at the set point",
                         "zh": "陀螺在设定点的温度误差"},
+    "bound_line_e_align": {"en": "the input axis's misalignment on the Earth rate",
+                           "zh": "输入轴对准误差对地球自转角速度的影响"},
+    "bound_line_e_a_bnd": {"en": "the scale factor's bounded part",
+                           "zh": "标度因数的有界部分"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},

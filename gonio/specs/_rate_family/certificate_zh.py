@@ -13,6 +13,8 @@ COMMON_PHRASES_ZH = (
      _TB_ZH + " × 5.1.3.4 各次试验的 T_c,SF/a（无该试验时为 0）"),
     (_TB + r" × the bias temperature coefficient of 5\.3\.3\.6's visits \(0 without them\)",
      _TB_ZH + " × 5.3.3.6 各次测量的零偏温度系数（无该测量时为 0）"),
+    (_TB + r" × \(\|β\| \+ U\(β\)\) of 5\.3\.3\.6 \(0 without its visits\)",
+     _TB_ZH + " × 5.3.3.6 的 (|β| + U(β))（无该测量时为 0）"),
     (r"the gyro's temperature error at the set points, any pattern within ± \(chamber "
      r"deviation bound \+ half the uniformity\) \(the errors may follow the set point: the "
      r"slope's bound \(δ \+ U/2\)·\|T_c\|·Σ\|T_i − T̄\|/Σ\(T_i − T̄\)²\)",

@@ -133,7 +133,8 @@ BOUND_CONDITION_BASIS = (
 TABLE_LINE = "e_table"
 
 
-def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict):
+def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict,
+                          basis: str = BOUND_CONDITION_BASIS):
     """The one statement of a rate item into which the rate table's relative error enters
     (JJF 1535 7.2.1 K, Annex A u₁; IEC 62047-20 5.1.3.1 a_BASE, 5.1.3.2), one reading of
     what a laboratory that states no certificate u for its table can certify:
@@ -159,7 +160,10 @@ def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict
       bounded line at its bound covers as little as 84 % (one line) and 0 % (the table and
       e_TU at once: IEC a_BASE in the worst case). Stated by its interval value ± U, ν_rest
       printed, no k (U is no multiple of u_c; u_c stays the budget's, for the budget table
-      and the items computed with it); the parts in the returned dict for the details.
+      and the items computed with it); the parts in the returned dict for the details,
+      ``basis`` the words they keep for what was bounded (:data:`BOUND_CONDITION_BASIS`,
+      the rate table and the gyro's temperature error; an item with other bounded lines
+      names its own).
 
     >>> from uncertainty import from_u, type_b
     >>> from gonio.result.gum import gum
@@ -201,7 +205,7 @@ def table_bound_statement(u, value: float, u_stated: float | None, bounded: dict
     parts = {"a": a, "a_lines": {s: abs(float(rows[s].get("c") or 0.0)) * float(h)
                                  for s, h in bounded.items()},
              "u_rest": u_rest, "nu_rest": nu_rest, "k_rest": k, "U": big_u,
-             "U_quadrature": u.U, "k_quadrature": u.k, "basis": BOUND_CONDITION_BASIS}
+             "U_quadrature": u.U, "k_quadrature": u.k, "basis": basis}
     return dataclasses.replace(
         u, U=big_u, k=None, nu_eff=nu_rest, coverage_probability=p, k_source=K_SOURCE_BOUND,
         interval=(float(value) - big_u, float(value) + big_u),

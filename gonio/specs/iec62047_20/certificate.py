@@ -142,6 +142,12 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     # rate table's line standing for it where a_BASE's u_c is not known
     (r"scale factor, relative: u_c\(a_BASE\)/a_BASE of 5\.1\.3\.1, with its ν_eff",
      "标度因数（相对）：5.1.3.1 的 u_c(a_BASE)/a_BASE，含其有效自由度 ν_eff"),
+    # the bias's lines of a_BASE (items._e_a_rest, items._bias_budget) and of 5.3.3.6's bound
+    (r"scale factor, relative: u_rest/a_BASE of 5\.1\.3\.1's lines other than its bounded "
+     r"ones, with their ν_rest",
+     "标度因数（相对）：5.1.3.1 有界分量以外各分量的 u_rest/a_BASE，含其自由度 ν_rest"),
+    (r"scale factor, relative: a_BASE's bounded part a/a_BASE of 5\.1\.3\.1 \(0 where it "
+     r"has none\)", "标度因数（相对）：5.1.3.1 中 a_BASE 的有界部分 a/a_BASE（无有界部分时为 0）"),
     (r"scale factor, relative: the rate table's line alone \(a_BASE's u_c not known\)",
      "标度因数（相对）：仅计速率转台分量（a_BASE 的 u_c 未知）"),
     (r"scale factor, relative: the rate table's line alone \(a_BASE's u_c not known\): no "

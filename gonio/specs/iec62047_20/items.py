@@ -48,6 +48,9 @@ class Context(RateContext):
     a_base: float | None = None
     a_base_u_rel: float | None = None
     a_base_nu: float = math.inf
+    a_base_bound_rel: float = 0.0
+    a_base_rest_u_rel: float | None = None
+    a_base_rest_nu: float = math.inf
 
 
 def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:
@@ -822,46 +825,113 @@ def bias_tc_dps_per_c(ctx: Context) -> float:
         return 0.0
 
 
+def bias_tc_bound_dps_per_c(ctx: Context) -> float:
+    """The bound of |β| ((°/s)/°C) the bias's bound condition takes for the gyro's
+    temperature error at T_BASE: |β| + U(β) of 5.3.3.6's statement (:func:`bias_temperature`,
+    its 95 % interval's far end: the estimate alone is no bound, as for a_BASE's
+    :func:`sf_tc_rel_bound`); 0 when the readings hold no 5.3.3.6 visits or the item refuses
+    them (no coefficient to bound with: the line is then 0, as before)."""
+    if not ctx.has("bias_temperature"):
+        return 0.0
+    try:
+        it = bias_temperature(ctx)
+    except (GonioError, ValueError, IndexError, KeyError):
+        return 0.0
+    if not it.measured or it.value is None or not math.isfinite(it.value):
+        return 0.0
+    unc = it.uncertainty
+    if unc is not None and unc.U is not None and math.isfinite(float(unc.U)):
+        return abs(float(it.value)) + float(unc.U)
+    if unc is not None and unc.interval is not None:
+        return max(abs(float(e)) for e in unc.interval)
+    return abs(float(it.value))
+
+
+#: What the bias (5.3.3.1) and 5.3.3.2 keep in ``details.bound_condition.basis``.
+BIAS_BOUND_BASIS = (
+    "bound condition: the bounded lines (the gyro's temperature error at T_BASE, the "
+    "chamber's deviation and place bounds × |β| + U(β) of 5.3.3.6; the input axis's "
+    "misalignment bound on the horizontal Earth rate; a_BASE's own bounded part, where "
+    "5.1.3.1 is stated by its bound condition) at their bounds with one sign, added "
+    "linearly, a = Σ|c_i|·a_i, plus k·u of the other lines, U = a + t_95(ν_rest)·u_rest "
+    "(JCGM 100 4.3.7, 6.2); holds at least 95 % at every condition within the bounds")
+
+
+def _bias_budget(ctx: Context) -> tuple[float, list, list, float, dict]:
+    """The budget of the 5.3.3.1 bias (:func:`bias`): (value °/s, the records' values, the
+    budget's inputs, the records' mean Earth component °/s, the bounded lines {symbol:
+    half-width}). N_bias = (Out,ave − null)/a_BASE − Ω_E,proj (eq. (24) with the reading
+    taken: computed in output units and divided by a_BASE), so a relative error e_a of
+    a_BASE moves it by −(N_bias + Ω_E,proj)·e_a: the line of a_BASE's u (:func:`_e_a`:
+    u_c(a_BASE)/a_BASE, or, where 5.1.3.1 is stated by its bound condition, its other
+    lines' u_rest/a_BASE with ν_rest) and, bounded, a_BASE's bounded part a/a_BASE
+    (``e_a_bnd``)."""
+    vals, earths, raw = [], [], []
+    for s in segment_means(ctx.df, "bias"):
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
+        vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
+        earths.append(earth)
+        raw.append(s.mean)
+    v = np.array(vals)
+    h_tu = gyro_temperature_bound_c(ctx) * bias_tc_bound_dps_per_c(ctx)
+    h_al = rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg)) \
+        * math.sin(math.radians(ctx.axis_alignment_deg))
+    ins = [from_u("N_bias", float(v.mean()),
+                  float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
+                  dof=max(v.size - 1, 1), source="spread of the records"),
+           from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(raw)))
+                  / abs(ctx.a_base), type="B",
+                  source="acquisition gain on the whole output (null included)"),
+           type_b("e_TU", 0.0, h_tu, "rectangular",
+                  source=TEMPERATURE_BOUND_SOURCE + " × (|β| + U(β)) of 5.3.3.6 (0 without "
+                                                    "its visits)"),
+           type_b("e_align", 0.0, h_al, "rectangular",
+                  source="input-axis alignment × horizontal Earth rate"),
+           _e_a_rest(ctx),
+           type_b("e_a_bnd", 0.0, ctx.a_base_bound_rel, "rectangular",
+                  source="scale factor, relative: a_BASE's bounded part a/a_BASE of 5.1.3.1 "
+                         "(0 where it has none)")]
+    return float(v.mean()), v, ins, float(np.mean(earths)), \
+        {"e_TU": h_tu, "e_align": h_al, "e_a_bnd": ctx.a_base_bound_rel}
+
+
+def _bias_statement(u, value: float, bounded: dict):
+    """The bias's (and 5.3.3.2's) statement: by the bound condition (:func:`table_bound_statement`
+    with :data:`BIAS_BOUND_BASIS`) over the lines of ``bounded`` that are not 0 (the gyro's
+    temperature error, the alignment, a_BASE's bounded part: Table 2 and the fixture let
+    each sit at its bound, where a rectangular line in the quadrature covers about 92 % on
+    the demo); the GUM budget's U = k·u_c where every bound is 0."""
+    bounded = {s: h for s, h in bounded.items() if float(h) > 0.0}
+    if not bounded:
+        return u, {}
+    return table_bound_statement(u, value, None, bounded, basis=BIAS_BOUND_BASIS)
+
+
 def bias(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.1 eq (24): N_bias = Out,ave − Earth-rate component (°/s), computed in
     output units then divided by a_BASE (reading taken). The Earth component uses the
     physics (axis up Ω_E sin λ, horizontal Ω_E cos λ cos φ); the printed sin/cos are swapped
-    (erratum). Mean over the records. Budget: the records' spread (type A), the
-    acquisition's relative gain uncertainty on the whole output, null included, the gyro's
-    temperature error at T_BASE (:func:`gyro_temperature_bound_c`: the chamber's deviation
-    and the gyro's place in its volume, both bounded, bounds added linearly; rectangular)
-    times the bias temperature coefficient of the 5.3.3.6 visits (e_TU; a_BASE, the initial
-    scale-factor variation and the bias carry it), and the input axis's
-    alignment on the horizontal Earth rate."""
+    (erratum). Mean over the records. Budget (:func:`_bias_budget`): the records' spread
+    (type A), the acquisition's relative gain uncertainty on the whole output, null
+    included, the gyro's temperature error at T_BASE (:func:`gyro_temperature_bound_c`: the
+    chamber's deviation and the gyro's place in its volume, both bounded, bounds added
+    linearly) times |β| + U(β) of the 5.3.3.6 visits (e_TU), the input axis's alignment on
+    the horizontal Earth rate, and a_BASE (the division of the reading taken for eq. (24)).
+    Stated by the bound condition (:func:`_bias_statement`)."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)
     if m:
         return m
-    vals, earth, raw = [], None, []
-    for s in segment_means(ctx.df, "bias"):
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
-        vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
-        raw.append(s.mean)
-    v = np.array(vals)
-    b_tc = bias_tc_dps_per_c(ctx)
-    u = gum(lambda b, en, eTU, eal: b + en + eTU + eal,
-            [from_u("N_bias", float(v.mean()),
-                    float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
-                    dof=max(v.size - 1, 1), source="spread of the records"),
-             from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(raw)))
-                    / abs(ctx.a_base), type="B",
-                    source="acquisition gain on the whole output (null included)"),
-             type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx) * abs(float(b_tc)),
-                    "rectangular", source=TEMPERATURE_BOUND_SOURCE + " × the bias temperature "
-                                          "coefficient of 5.3.3.6's visits (0 without them)"),
-             type_b("e_align", 0.0, rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg))
-                    * math.sin(math.radians(ctx.axis_alignment_deg)), "rectangular",
-                    source="input-axis alignment × horizontal Earth rate")])
-    return Item("bias", t, cl, un, float(v.mean()), uncertainty=u, details={
+    value, v, ins, earth, bounded = _bias_budget(ctx)
+    u = gum(lambda b, en, eTU, eal, ea, eab: (b + earth) / ((1 + ea) * (1 + eab)) - earth
+            + en + eTU + eal, ins)
+    u, bc = _bias_statement(u, value, bounded)
+    return Item("bias", t, cl, un, value, uncertainty=u, details={
         "records_dps": v, "earth_component_dps": earth,
         "printed_formula_earth_dps": rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg)),
         "erratum": "5.3.3.1 prints Ω cos λ for a vertical axis and Ω sin λ cos φ for a "
-                   "horizontal one; physically they are Ω sin λ and Ω cos λ cos φ"})
+                   "horizontal one; physically they are Ω sin λ and Ω cos λ cos φ",
+        **({"bound_condition": bc} if bc else {})})
 
 
 def bias_repeatability(ctx: Context) -> Item:
@@ -1524,17 +1594,20 @@ def _power_on_records(ctx: Context):
 
 def initial_bias_variation(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.2 eq (25): bias (Earth rate removed, 5.3.3.1) minus the nominal bias
-    Out,typ, in °/s (reading taken: divided by a_BASE when the output is in V or bit)."""
+    Out,typ, in °/s (reading taken: divided by a_BASE when the output is in V or bit). The
+    bias's budget and statement (:func:`_bias_budget`, :func:`_bias_statement`: the bound
+    condition), shifted by Out,typ."""
     t, cl, un = "initial bias variation", "5.3.3.2", "°/s"
     m = _miss(ctx, "bias", "initial_bias_variation", t, cl, un)
     if m:
         return m
-    b = bias(ctx)
+    value, _, ins, earth, bounded = _bias_budget(ctx)
     typ = ctx.protocol["power_on"]["nominal_bias_dps"]
-    u = gum(lambda x: x - typ, [from_u("N_bias", b.value, b.uncertainty.u_c,
-                                       dof=budget_nu(b.uncertainty), source="bias of 5.3.3.1")])
-    return Item("initial_bias_variation", t, cl, un, b.value - typ, uncertainty=u,
-                details={"nominal_bias_dps": typ})
+    u = gum(lambda b, en, eTU, eal, ea, eab: (b + earth) / ((1 + ea) * (1 + eab)) - earth
+            + en + eTU + eal - typ, ins)
+    u, bc = _bias_statement(u, value - typ, bounded)
+    return Item("initial_bias_variation", t, cl, un, value - typ, uncertainty=u,
+                details={"nominal_bias_dps": typ, **({"bound_condition": bc} if bc else {})})
 
 
 def bias_drift_after_power_on(ctx: Context) -> Item:
@@ -2959,6 +3032,13 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
         return ctx
     if sf.uncertainty is None or not sf.value:
         return replace(ctx, a_base=sf.value)
+    bc = (sf.details or {}).get("bound_condition")
+    if bc:
+        return replace(ctx, a_base=sf.value, a_base_u_rel=sf.uncertainty.u_c / abs(sf.value),
+                       a_base_nu=budget_nu(sf.uncertainty),
+                       a_base_rest_u_rel=float(bc["u_rest"]) / abs(sf.value),
+                       a_base_rest_nu=float(bc["nu_rest"]),
+                       a_base_bound_rel=float(bc["a"]) / abs(sf.value))
     return replace(ctx, a_base=sf.value, a_base_u_rel=sf.uncertainty.u_c / abs(sf.value),
                    a_base_nu=budget_nu(sf.uncertainty))
 
@@ -2973,6 +3053,18 @@ def _e_a(ctx: Context):
                                "rate table's line alone (a_BASE's u_c not known)")
     return from_u("e_K", 0.0, ctx.a_base_u_rel, dof=ctx.a_base_nu, type="B",
                   source="scale factor, relative: u_c(a_BASE)/a_BASE of 5.1.3.1, with its ν_eff")
+
+
+def _e_a_rest(ctx: Context):
+    """The line of a_BASE's relative error in the bias (5.3.3.1, :func:`_bias_budget`): where
+    5.1.3.1 is stated by its bound condition, its other lines' u_rest/a_BASE with ν_rest (the
+    bounded part, a/a_BASE, is the bias's bounded line ``e_a_bnd``, not counted twice);
+    else :func:`_e_a`'s u_c(a_BASE)/a_BASE."""
+    if ctx.a_base_rest_u_rel is None:
+        return _e_a(ctx)
+    return from_u("e_a", 0.0, ctx.a_base_rest_u_rel, dof=ctx.a_base_rest_nu, type="B",
+                  source="scale factor, relative: u_rest/a_BASE of 5.1.3.1's lines other "
+                         "than its bounded ones, with their ν_rest")
 
 
 #: The characteristics in the order of Table 4: (key, title, clause, function).
