@@ -177,7 +177,25 @@ def _rows(doc, path) -> dict:
                 if v is not None and v not in have:
                     raise GonioError(f"{name} row {i + 1}: {fk.parent.name} {str(v)[:64]} is "
                                      f"not among the archive's {target.table.name}", file=path)
+    _check_zone(out["settings"], path)
     return out
+
+
+def _check_zone(settings: list[dict], path) -> None:
+    """GonioError unless the archive's setting ``timezone`` is empty (an archive written
+    before stores held a zone, :func:`_settings_kept`) or a zone of the IANA database
+    (:func:`gonio.records.models.laboratory_zone`, as ``gonio db set`` checks it): a store
+    restored with an unknown zone would refuse every command that needs the laboratory's
+    date, so the archive is refused before anything is written."""
+    from gonio.records.models import laboratory_zone
+
+    for i, r in enumerate(settings):
+        if r.get("key") == "timezone" and r.get("value"):
+            try:
+                laboratory_zone(str(r["value"]))
+            except GonioError as exc:
+                raise GonioError(f"records.json settings row {i + 1} (timezone): "
+                                 f"{exc.message}: nothing restored", file=path) from None
 
 
 def open_archive(path: str | os.PathLike, follow_links: bool = True):

@@ -347,6 +347,51 @@ def test_a_restore_takes_the_archive_s_time_zone(sqlite_store, tmp_path, monkeyp
         target.close()
 
 
+def test_a_restore_refuses_an_archive_with_an_unknown_time_zone(sqlite_store, tmp_path,
+                                                                 capsys, monkeypatch):
+    """An archive whose setting ``timezone`` is no IANA zone is refused at restore (and at
+    verify) in one line naming records.json's setting, exit 2, nothing restored: the store
+    keeps its own zone and every dated command still works."""
+    from gonio.records.models import records_zone
+
+    monkeypatch.setenv("TZ", "Europe/Berlin")
+    people = make_people(sqlite_store)
+    services.set_settings(sqlite_store, people["admin"], timezone="Asia/Shanghai")
+    archive = tmp_path / "a.zip"
+    backup(sqlite_store, archive)
+
+    def mars(doc):
+        t = doc["tables"]["settings"]
+        key, val = t["columns"].index("key"), t["columns"].index("value")
+        for r in t["rows"]:
+            if r[key] == "timezone":
+                r[val] = "Mars/Olympus"
+        return doc
+
+    bad = archive_without(archive, tmp_path / "b.zip", records_json=mars)
+    cli(["db", "init", "--data", tmp_path / "target"], capsys, 0)
+    out = cli(["db", "restore", bad, "--data", tmp_path / "target"], capsys, 2)
+    err = out.err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    assert "settings" in err and "timezone" in err and "'Mars/Olympus'" in err, err
+    assert "nothing restored" in err, err
+    from gonio.records.backup import check_archive
+    with pytest.raises(GonioError, match="Mars/Olympus"):     # the web page's check too
+        check_archive(bad)
+    target = open_store(None, tmp_path / "target")
+    try:
+        assert records_zone(target) == "Europe/Berlin"         # db init's, not the archive's
+        assert_empty(target)
+    finally:
+        target.close()
+    cli(["db", "restore", archive, "--data", tmp_path / "target"], capsys, 0)
+    target = open_store(None, tmp_path / "target")
+    try:
+        assert records_zone(target) == "Asia/Shanghai"
+    finally:
+        target.close()
+
+
 def _trail(st) -> list[dict]:
     """The audit trail's rows in id order, every value as records.json writes it."""
     with st.session() as s:
