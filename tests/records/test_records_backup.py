@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import zipfile
 
 import pytest
@@ -23,14 +24,32 @@ from .conftest import PASSWORD, make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
 
 
+@pytest.fixture(scope="module")
+def _records_made_once(tmp_path_factory, computed_folder, bench_readings):
+    """The data folder of :func:`records`, made once for the module (people, an issue and a
+    computation each test would otherwise make again: some 5 s a test)."""
+    data = tmp_path_factory.mktemp("records-once") / "data"
+    st = open_store(None, data)
+    try:
+        with pytest.MonkeyPatch.context() as mp:
+            people = make_people(st)
+            inst, std = one_issued(st, people, computed_folder, bench_readings, mp)
+            new_calibration(st, people, inst, std, bench_readings[1])
+            run_worker(st, mp, computed_folder)
+    finally:
+        st.close()
+    return data
+
+
 @pytest.fixture
-def records(sqlite_store, computed_folder, bench_readings, monkeypatch):
-    """A SQLite records store with one issued certificate and one computed calibration."""
-    people = make_people(sqlite_store)
-    inst, std = one_issued(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
-    new_calibration(sqlite_store, people, inst, std, bench_readings[1])
-    run_worker(sqlite_store, monkeypatch, computed_folder)
-    return sqlite_store
+def records(_records_made_once, tmp_path):
+    """A SQLite records store with one issued certificate and one computed calibration: a
+    copy of the module's folder (database and stored files, modes kept) in
+    ``tmp_path / "data"``, the test's own to change."""
+    shutil.copytree(_records_made_once, tmp_path / "data")
+    st = open_store(None, tmp_path / "data")
+    yield st
+    st.close()
 
 
 def one_issued(store, people, computed_folder, bench_readings, monkeypatch):

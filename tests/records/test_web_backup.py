@@ -12,7 +12,8 @@ from gonio.records import services
 from gonio.records.backup import backup, check_archive, restore
 from gonio.records.db import open_store
 
-from .test_records_backup import damage, first_pdf, records  # noqa: F401  (the fixture)
+from .test_records_backup import (_records_made_once, damage, first_pdf,  # noqa: F401
+                                  records)  # noqa: F401  (the fixtures)
 from .test_web_security import PASSWORD, csrf_of, login
 
 
