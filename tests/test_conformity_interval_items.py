@@ -213,7 +213,8 @@ def test_a_guard_band_that_empties_the_acceptance_interval_is_said_in_words():
 
 #: The interval-stated items (k None) of the four specifications' seed-0 demos, each with
 #: its k_source, as results.json holds them: (spec, item, value, interval, k_source, ν). The
-#: triad states none by an interval alone (its bound conditions carry a k).
+#: triad's are its ARW values (χ², as JJF's bias stability; not repeated here) — its bound
+#: conditions carry a k.
 INTERVAL_ITEMS = [
     ("ogam-draft", "scale_factor_nonlinearity", 5.0456e-05, (0.0, 1.7323e-04), "neyman-belt",
      None),

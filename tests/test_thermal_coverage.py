@@ -260,3 +260,57 @@ def test_certified_points_of_a_set_point_measured_once():
         q = pts[(key, 2, 1)]
         d = sum(j * c[f"theta{j}"] * q["theta_c"] ** (j - 1) for j in range(1, fit.n_t + 1))
         assert q["slope"] == pytest.approx(d, rel=1e-6), key
+
+
+def test_arw_chi2_spread_is_that_of_refitted_chi2_draws():
+    """The χ² spread of a fitted ARW(ϑ) (:meth:`ChannelModel.arw_chi2`): each dwell's ARW a
+    sample standard deviation of n samples, s²(n − 1)/σ² ~ χ²_(n−1). Checked by drawing
+    those χ² directly (numpy) and refitting the same-order polynomial with numpy.polyfit
+    at every draw: the spread of the fitted value at a point matches u within 3 %, and ν is
+    ½(ARW/u)²."""
+    import pandas as pd
+
+    from gonio.specs.triad_alignment.thermal_model import ChannelModel, fit_polynomial
+
+    rng = np.random.default_rng(20261202)
+    theta = np.repeat(np.array([-63.5, -43.5, -23.5, -3.5, 1.5, 16.5, 36.5, 61.5]), 3)
+    sigma = 0.3 * (1 + 5e-3 * theta + 2e-5 * theta ** 2)
+    n = np.full(theta.size, 600)
+    n[::3] = 300                                   # unequal dwells: ν_i differ
+    y = sigma * np.sqrt(rng.chisquare(n - 1) / (n - 1))
+    fit = fit_polynomial("ARW_z", theta, np.zeros(theta.size), y, orders=(2, 0))
+    pts = pd.DataFrame({"theta_c": theta, "arw_deg_sqrt_h": y, "arw_n": n,
+                        "arw_fs_hz": 10.0})
+    m = ChannelModel("z", fit, fit, fit, None, pts, "sensor", (-63.5, 61.5), (0.0, 0.0))
+    for at in (-40.0, 0.0, 60.0):
+        u, nu = m.arw_chi2(at)
+        fitted = np.polyval(np.polyfit(theta, y, 2), theta)
+        draws = fitted[None, :] * np.sqrt(rng.chisquare(n - 1, (20000, theta.size)) / (n - 1))
+        vals = np.polyval(np.polyfit(theta, draws.T, 2), at)     # every draw refitted
+        assert u == pytest.approx(float(np.std(vals, ddof=1)), rel=0.03), at
+        assert nu == pytest.approx(0.5 * (float(fit.predict(at)[0]) / u) ** 2, rel=1e-12)
+
+
+def test_flicker_lift_is_the_mean_sample_variance_of_synthesised_flicker():
+    """:func:`flicker_lift_var` against records of flicker noise synthesised here by FFT
+    (one-sided PSD h/f, h = B²/π, from fs/N to fs/2): the mean sample variance of
+    600-sample records at 10 Hz is the function's value within 6 %; twice B gives four times
+    the lift, and a record of one sample none."""
+    from gonio.specs.triad_alignment.thermal_model import flicker_lift_var
+
+    rng = np.random.default_rng(7)
+    fs, n, b = 10.0, 600, 2e-3
+    big = 2 ** 20
+    f = np.fft.rfftfreq(big, 1.0 / fs)
+    s = np.zeros_like(f)
+    s[1:] = b * b / math.pi / f[1:]
+    means = []
+    for _ in range(4):
+        c = (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)) \
+            * np.sqrt(s * fs / big)                 # E|c|² = 2 S Δf, Δf = fs/N
+        x = np.fft.irfft(c * big / 2.0, n=big)
+        rec = x[: (big // n) * n].reshape(-1, n)
+        means.append(float(np.mean(np.var(rec, axis=1, ddof=1))))
+    assert float(np.mean(means)) == pytest.approx(flicker_lift_var(b, n, fs), rel=0.06)
+    assert flicker_lift_var(2 * b, n, fs) == pytest.approx(4 * flicker_lift_var(b, n, fs))
+    assert flicker_lift_var(b, 1, fs) == 0.0

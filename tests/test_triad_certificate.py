@@ -127,7 +127,7 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
             assert spans[f"items.{key}.details.bound_condition.U"] == U_txt
             assert f"items.{key}.uncertainty.U" not in spans
             assert spans[f"items.{key}.value"] == half_up(it["value"], dec)
-    for key in ("b_z_t5_v2", "ARW_z_t3"):   # the certified points, value ± U (k)
+    for key in ("b_z_t5_v2",):   # the certified points, value ± U (k)
         it = res["items"][key]
         U_txt, dec = two_sig(it["uncertainty"]["U"])
         assert spans[f"items.{key}.uncertainty.U"] == U_txt, key
@@ -392,9 +392,13 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
     for p in ("xy", "xz", "yx", "yz", "zx", "zy"):  # S and L: the interval, no k of the whole
         assert f"items.S_{p}.uncertainty.k" not in srcs
         assert f"items.L_{p}.uncertainty.k" not in srcs
-    ps = {it["uncertainty"]["coverage_probability"] for it in res["items"].values()
-          if it.get("uncertainty") and it["uncertainty"].get("U") is not None}
+    ps = {it["uncertainty"]["coverage_probability"] for k, it in res["items"].items()
+          if it.get("uncertainty") and it["uncertainty"].get("U") is not None
+          and not k.startswith("ARW_")}
     assert ps == {0.9545}, ps                       # the p the k were computed for
+    # ARW, a dispersion, by its one-sided χ² 95 % interval (no k): its own p, stated in its cell
+    assert {it["uncertainty"]["coverage_probability"] for k, it in res["items"].items()
+            if k.startswith("ARW_")} == {0.95}
     stated = "95.45"
     text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
     # p is chosen (the k are t for it): "p = 95.45 %", never "approximately 95.45 %"
@@ -404,7 +408,9 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
     assert f"p = {stated} %" in summary and not re.search(r"≈ ?95(\.45)? %", summary)
     dcc = run["dir"] / "cal" / "certificate.dcc.xml"
     if dcc.exists():
-        got = set(re.findall(r"<si:coverageProbability>([^<]*)<", dcc.read_text(encoding="utf-8")))
+        xml = re.sub(r'<dcc:result id="result-ARW_.*?</dcc:result>', "",
+                     dcc.read_text(encoding="utf-8"), flags=re.S)
+        got = set(re.findall(r"<si:coverageProbability>([^<]*)<", xml))
         assert got and {float(x) for x in got} == {float(stated) / 100}, got
     from gonio.specs.triad_alignment.certificate import READINGS_TAKEN_ZH, TEXT
     zh = " ".join(READINGS_TAKEN_ZH) + " ".join(v[1] for v in TEXT.values())
@@ -451,7 +457,8 @@ def test_one_statement_per_item_everywhere(run):
     bound_keys = [k for k in res["items"] if k[:2] in ("M_", "S_", "L_") or k.startswith("K_")]
     assert len(bound_keys) == 9 + 6 + 6 + 24
     # summary.txt lists the items in results.json's order; the interval lines are these
-    stated = re.findall(r"interval \[([^,]+), ([^\]]+)\]", summary)
+    stated = re.findall(r"interval \[([^,]+), ([^\]]+)\]", "\n".join(
+        ln for ln in summary.splitlines() if "angle random walk" not in ln))
     assert len(stated) == len(bound_keys)
     for key, (s_lo, s_hi) in zip(bound_keys, stated):
         it = res["items"][key]
@@ -472,7 +479,7 @@ def test_one_statement_per_item_everywhere(run):
         assert float(d_hi) >= hi - 1e-12 and float(d_hi) < hi + 10 * step, key
         assert rows[key]["U"] == "" and rows[key]["k"] == "", key
         assert float(rows[key]["interval_low"]) == pytest.approx(lo, rel=1e-12)
-    for key in ("b_x", "b_z_t1_v1", "ARW_z_t1"):
+    for key in ("b_x", "b_z_t1_v1"):
         u = res["items"][key]["uncertainty"]
         assert u["k"] is not None and u.get("interval") is None, key
 
@@ -503,3 +510,55 @@ def test_dcc_states_no_uncertainty_the_certificate_does_not(run, dcc_schema):
         b = blocks[key]
         assert "valueStandardMU" not in b and "intervalMin intervalMax" in b, key
         assert "p = 95.45 %" in b, key
+
+
+def test_arw_is_stated_by_its_one_sided_chi2_bound_alone_everywhere(run):
+    """ARW(ϑ) at a set point is a dispersion (the static dwells' sample standard deviations):
+    one statement, the one-sided χ² 95 % interval [0, N·√(ν/χ²_0.05,ν)] with ν = ½(N/u_c)²
+    (computed here by scipy's χ² from the stored N and budget), no k, no "± U" — the same
+    upper end on the certificate's ARW table, in summary.txt, in the DCC (intervalMin 0,
+    intervalMax, p 0.95) and in results.json's upper_bound. Its budget holds the dwells' χ²
+    under white rate noise and the bias-instability lift correction (half the full-band
+    lift, value = uncorrected·√(1 − x/2))."""
+
+    from scipy.stats import chi2
+
+    res, page = run["res"], run["html"]
+    cal = run["dir"] / "cal"
+    summary = (cal / "summary.txt").read_text(encoding="utf-8")
+    dcc = (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    table = page[page.index('id="points-ARW-z"'):]
+    table = html.unescape(re.sub(r"<[^>]+>", " ", table[:table.index("</table>")])).replace(
+        "\u00a0", " ")
+    assert "± " not in table and "k =" not in table
+    spans = {src: text for src, rule, text in SPANS.findall(page)}
+    keys = [k for k in res["items"] if k.startswith("ARW_")]
+    assert len(keys) == 8
+    for key in keys:
+        it = res["items"][key]
+        u = it["uncertainty"]
+        assert u["k"] is None and u["k_source"] == "chi-square" and u["coverage_probability"] == 0.95
+        assert it["nonnegative"] is True
+        u_c = math.sqrt(sum(c["u"] ** 2 for c in u["components"]))
+        assert u["u_c"] == pytest.approx(u_c, rel=1e-12)
+        nu = 0.5 * (it["value"] / u_c) ** 2
+        hi = it["value"] * math.sqrt(nu / chi2.ppf(0.05, nu))
+        assert u["interval"][0] == 0.0 and u["interval"][1] == pytest.approx(hi, rel=1e-9), key
+        syms = [c["symbol"] for c in u["components"]]
+        assert syms[:2] == [f"{key}_chi2", f"{key}_BI"], syms
+        d = it["details"]
+        assert it["value"] == pytest.approx(d["arw_uncorrected"]
+                                            * math.sqrt(1 - d["lift_full_rel_var"] / 2), rel=1e-12)
+        # the printed upper end: rounded up at its stated decimal place, the same everywhere
+        dec = len(spans[f"items.{key}.value"].partition(".")[2])   # the value's place
+        up = str(Decimal(repr(hi)).quantize(Decimal(1).scaleb(-dec), rounding=ROUND_CEILING))
+        assert float(up) == it["upper_bound"], key
+        assert f"≤ {up} (p = 95 %)" in table, key
+        line = next(ln for ln in summary.splitlines() if key in ln or
+                    f"at {it['details']['setpoint_c']:g} °C:" in ln and "angle random walk" in ln)
+        assert f"upper bound: ≤ {up} °/√h (interval [0, {up}], p = 95 %)" in line, line
+        assert "±" not in line and "k =" not in line, line
+        block = dcc[dcc.index(f'id="result-{key}"'):]
+        block = block[:block.index("</dcc:result>")]
+        assert f"<si:intervalMax>{up}</si:intervalMax>" in block, key
+        assert "<si:coverageProbability>0.95<" in block and "coverageFactor" not in block, key

@@ -39,15 +39,19 @@ from gonio.formats.jsonsafe import json_safe
 from gonio.result.model import (Covariance, Item, Result, Uncertainty, not_measured,
                                 source_info)
 from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
-                                                      compensate_record, identify_thermal_model)
-from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
+                                                      compensate_record, flicker_lift_var,
+                                                      identify_thermal_model)
+from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, FLICKER_FLOOR,
+                                                 OFFDIAG,
                                                  RATE_ERROR_BOUND_K,
                                                  AlignmentResult, bias_instability_u_dps,
                                                  cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
+from gonio.result.gum import dispersion_uncertainty
 from gonio.result.statement import coverage_k, p_text
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dph_to_dps, dps_to_dph
 from gonio.specs.triad_alignment.figure_data import figure_series
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
 
@@ -81,6 +85,12 @@ READINGS_TAKEN = (
     "model is fed with the gyro's internal temperature sensor (thesis §6.1); the certified "
     "values are K, b and ARW at the programme's set points and supply levels, the order "
     "choice inside U; the coefficients are information.",
+    "ARW at the set points: a dispersion (the static dwells' sample standard deviations), "
+    "stated by its one-sided χ² interval alone, [0, N·√(ν/χ²_0.05,ν)], p = 95 %, no k: ν from "
+    "the χ² of the dwells under white rate noise (ν = n − 1 each) through the fit, with the "
+    "model order and the temperature reading, ν = ½(N/u_c)²; the bias instability's lift of "
+    "the dwells' variance (B̂ from the static record's Allan floor) corrected by half its "
+    "full-band flicker value, the other half inside u_c.",
 )
 
 
@@ -593,6 +603,83 @@ def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None,
     return Uncertainty(comp, u_c, k * u_c, k, float(nu_eff), None, COVERAGE, K_SOURCE_WS)
 
 
+def _arw_budget(key: str, fit, pt: dict, flicker: tuple | None = None
+                ) -> tuple[float, Uncertainty, dict]:
+    """A certified ARW(ϑ) value (a dispersion: the white-noise density read from the static
+    dwells' sample standard deviations) and its one statement: the value corrected for the
+    bias instability's lift, and its one-sided χ² 95 % interval alone
+    (:func:`gonio.result.gum.dispersion_uncertainty`: [0, N·√(ν/χ²_0.05,ν)], ν = ½(N/u_c)²;
+    no k, no "± U").
+
+    Budget: the χ² of the dwells under the white rate noise the procedure assumes
+    (:meth:`~gonio.specs.triad_alignment.thermal_model.ChannelModel.arw_chi2`, ``u_chi2``),
+    the model order and the temperature reading (as :func:`_point_budget`), and the lift.
+    A bias instability B adds to a dwell's sample variance; how much depends on where its
+    flicker band ends, which the static record's Allan floor does not show: between none
+    (band ending below 1/dwell) and the full-band lift L
+    (:func:`~gonio.specs.triad_alignment.thermal_model.flicker_lift_var`). ``flicker`` = (B̂ in
+    °/s, ν) from the alignment's static record (:func:`thermal_flicker`): the variance is
+    corrected by the midpoint L/2, N = ARW·√(1 − x/2) with x = L/σ̂² (σ̂ the dwell's rate sd
+    the fitted ARW gives), and the line is that correction's rectangular half-width
+    ARW·x/(4√3) together with B̂'s own spread (B̂² relative √(2/ν)). Without ``flicker``
+    nothing is corrected (the value then reads high by the lift, if any).
+    Returns (value, uncertainty, details)."""
+    value = float(pt["value"])
+    details: dict = {"arw_uncorrected": value, "chi2_edf": pt.get("nu_chi2")}
+    lines = [(f"{key}_chi2", "A", pt["u_chi2"], pt["nu_chi2"],
+              f"white rate noise: each static dwell's sample standard deviation of "
+              f"{pt['n_samples']} samples a χ² of ν = n − 1, through the least-squares fit of "
+              f"order ϑ {fit.n_t} by {fit.criterion}")]
+    if flicker is not None and flicker[0] > 0 and value > 0:
+        sigma2 = (float(deg_sqrt_s_from_deg_sqrt_h(value)) ** 2) * pt["fs_hz"]
+        x = min(flicker_lift_var(flicker[0], pt["n_samples"], pt["fs_hz"]) / sigma2, 1.0)
+        corrected = value * math.sqrt(1.0 - x / 2.0)
+        shift = value - corrected
+        u_lift = math.hypot(value * x / (4.0 * math.sqrt(3.0)),
+                            shift * math.sqrt(2.0 / flicker[1]) if flicker[1] > 0 else 0.0)
+        lines.append((f"{key}_BI", "B", u_lift, math.inf,
+                      "bias instability's lift of the dwells' variance: corrected by half the "
+                      "full-band flicker lift of B̂ (the static record's Allan floor / 0.664), "
+                      "rectangular over none … full, with B̂'s own spread"))
+        details.update({"flicker_b_dph": float(dps_to_dph(flicker[0])), "flicker_b_nu": flicker[1],
+                        "lift_full_rel_var": x, "lift_correction": shift})
+        value = corrected
+    if fit.criterion != "fixed":
+        lines.append((f"{key}_order", "B", pt["u_order"], pt["nu"],
+                      f"model order: {fit.criterion.upper()}-weighted spread of the candidate "
+                      "orders' values at this point about the selected one"))
+    if pt["nu_theta"] > 0:
+        lines.append((f"{key}_T", "A", abs(pt["slope"]) * pt["u_theta_c"], pt["nu_theta"],
+                      "temperature reading of the soaked set point: slope × u of the soak's "
+                      "mean (sensor − chamber)"))
+    comp = [{"symbol": sym, "type": typ, "u": float(u), "c": 1.0, "contribution": float(u),
+             "dof": float(nu), "source": src} for sym, typ, u, nu, src in lines]
+    u_c = math.sqrt(sum(c["u"] ** 2 for c in comp))
+    return value, dispersion_uncertainty(value, Uncertainty(comp, u_c, None, None, None, None,
+                                                            0.95, "chi-square")), details
+
+
+def thermal_flicker(al: AlignmentResult | None, readings: TriadReadings,
+                    th: ThermalModelResult) -> dict[str, tuple[float, float]]:
+    """Per gyro (B̂ °/s, ν) of the bias instability from the alignment's static record (its
+    Allan floor / 0.664, IEEE 952 Annex C; ν = T/τ_min − 1 as
+    :func:`gonio.specs.triad_alignment.analysis.bias_instability_u_dps` counts it), for the ARW
+    values' lift correction (:func:`_arw_budget`). Empty without a static record."""
+    st = readings.rows("static")
+    if al is None or al.averaging is None or not len(st):
+        return {}
+    av = al.averaging
+    static_s = float(st["duration_s"].sum())
+    out = {}
+    for ch in th.channels:
+        i = AXES.index(ch)
+        a_dph = float(np.asarray(av.min_adev_dph, float)[i])
+        if math.isfinite(a_dph) and a_dph > 0:
+            nu = max(static_s / float(np.asarray(av.tau_min_adev_s, float)[i]) - 1.0, 1.0)
+            out[ch] = (float(dph_to_dps(a_dph)) / FLICKER_FLOOR, nu)
+    return out
+
+
 def thermal_long_term(al: AlignmentResult | None, readings: TriadReadings,
                       th: ThermalModelResult) -> dict[str, tuple[float, float]]:
     """Per gyro (u, ν) of the long-term bias term of the thermal model's bias values, from
@@ -628,7 +715,8 @@ def _rest_of(unc: Uncertainty, drop: str) -> tuple[float, float]:
 
 
 def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None,
-                  rate_u_rel: float = 0.0, statement: str = "bound") -> dict[str, Item]:
+                  rate_u_rel: float = 0.0, statement: str = "bound",
+                  flicker: dict | None = None) -> dict[str, Item]:
     """The certified values of the identified K(ϑ, U), b(ϑ, U), ARW(ϑ) at the programme's
     set points and supply levels (:meth:`ChannelModel.certified_points`), in physical units:
     a fixed measurand per item, whatever orders the criterion chose (the coefficients are
@@ -637,8 +725,12 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
     ``rate_u_rel``: the rate table's relative standard uncertainty, a Type B line of every
     K value (:func:`_point_budget`); the K values also carry the bound-condition statement
     (:func:`bound_condition`: |K| × the rate error at its bound, k = 2 × ``rate_u_rel``, plus
-    k·u of the other lines) and ``statement`` says which one is certified (:func:`certified`)."""
+    k·u of the other lines) and ``statement`` says which one is certified (:func:`certified`).
+    The ARW values are dispersions, stated by their one-sided χ² interval alone
+    (:func:`_arw_budget`; ``flicker`` {gyro: (B̂, ν)}, :func:`thermal_flicker`, corrects their
+    bias-instability lift; without it they are not corrected)."""
     long_term = long_term or {}
+    flicker = flicker or {}
     items: dict[str, Item] = {}
     units = {"K": f"{unit}/(°/s)", "b": "°/s", "ARW": "°/√h"}
     names = {"K": "scale factor", "b": "bias", "ARW": "angle random walk"}
@@ -653,9 +745,12 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
             else:
                 key = f"{name}_{ch}_t{pt['t']}_v{pt['v']}"
                 at += f", {pt['supply_v']:g} V"
-            unc = _point_budget(key, fit, pt, long_term.get(ch) if name == "b" else None,
-                                rate_u_rel if name == "K" else 0.0)
-            both = {}
+            both, value = {}, pt["value"]
+            if name == "ARW":
+                value, unc, both = _arw_budget(key, fit, pt, flicker.get(ch))
+            else:
+                unc = _point_budget(key, fit, pt, long_term.get(ch) if name == "b" else None,
+                                    rate_u_rel if name == "K" else 0.0)
             if name == "K" and rate_u_rel > 0:
                 u_rest, nu_rest = _rest_of(unc, f"{key}_table")
                 bc = bound_condition(pt["value"], abs(pt["value"]) * RATE_ERROR_BOUND_K
@@ -663,7 +758,7 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
                 unc, other = not_certified(certified(unc, bc, statement), unc)
                 both = {"statement": statement, "bound_condition": bc, "not_certified": other}
             items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
-                              units[name], pt["value"], uncertainty=unc,
+                              units[name], value, uncertainty=unc, nonnegative=name == "ARW",
                               details={**both, "setpoint_c": pt["setpoint_c"],
                                        "supply_v": pt["supply_v"],
                                        "theta_c": pt["theta_c"], "u_v": pt["u_v"],
@@ -803,7 +898,8 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
                 "thesis eq. 6.14", "", f"the data were refused: {exc.message}")
         else:
             items.update(thermal_items(th, unit, thermal_long_term(al, r, th),
-                                       tr.table_metadata("rate_table_u_rel"), statement))
+                                       tr.table_metadata("rate_table_u_rel"), statement,
+                                       thermal_flicker(al, r, th)))
             tj = th.to_json()
             for ch, c in comp.items():
                 tj["channels"][ch]["compensation"] = c.to_json()

@@ -98,14 +98,22 @@ TEXT = {
                    "expanded uncertainty, every axis component at ±{bound}° — in their worst "
                    "combination, a, plus k·u of the other lines: U = a + k·u, with probability "
                    "at least p = " + P_STATED + " % at every table error within the bounds; no "
-                   "coverage factor of the whole. The other items (b, b(ϑ, U), ARW) are value ± "
-                   "U, U = k·u, each with its own k. Conformity is decided on these statements.",
+                   "coverage factor of the whole. The other items (b, b(ϑ, U)) are value ± U, "
+                   "U = k·u, each with its own k; ARW(ϑ), a dispersion, by its one-sided χ² "
+                   "interval [0, upper] alone (p = 95 %, no k). Conformity is decided on these "
+                   "statements.",
                    "每项一个表述。受速率转台影响的项（M、S、L 及 K(ϑ, U)）以界限条件区间表述：转台误差"
                    "取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
                    "±{bound}°——按最不利组合线性合成为 a，加上其他分量的 k·u：U = a + k·u；在界限内任一"
-                   "转台误差下包含概率不低于 p = " + P_STATED + " %；整体无包含因子。其余各项（b、b(ϑ, U)、"
-                   "ARW）为 值 ± U，U = k·u，各有其 k。符合性按这些表述判定。"),
+                   "转台误差下包含概率不低于 p = " + P_STATED + " %；整体无包含因子。其余各项（b、b(ϑ, U)）"
+                   "为 值 ± U，U = k·u，各有其 k；ARW(ϑ) 为离散度，仅以单侧 χ² 区间 [0, 上限] 表述"
+                   "（p = 95 %，无 k）。符合性按这些表述判定。"),
     "nu": ("ν", "ν"),
+    "arw_upper": ("upper bound", "上限"),
+    "arw_budget": ("ARW: u_c of its budget (the dwells' χ², the lift correction, the order, "
+                   "the temperature reading) and ν = ½(N/u_c)² of its χ²",
+                   "ARW：其不确定度分量的 u_c（各段 χ²、抬升修正、阶次、温度读数）及其 χ² 的 "
+                   "ν = ½(N/u_c)²"),
     "h_thermal": ("Temperature and supply model", "温度与电源电压模型"),
     "thermal_note": ("K(ϑ, U) and b(ϑ, U) as polynomials in ϑ = T − {tref} °C and U = V − {vref} V, "
                      "ARW(ϑ) in ϑ; orders chosen by {crit}; temperature: the gyro's {tsrc}; "
@@ -136,15 +144,20 @@ TEXT = {
                     "at which the model is evaluated), ARW(ϑ) at each set point; one statement "
                     "per cell, coverage probability p = " + P_STATED + " %: K the bound-condition "
                     "interval (U = a + k·u, a = |K| × the rate error at its bound; k of the "
-                    "other lines in its k column), b and ARW value ± U with their own "
-                    "k = t(ν_eff). U includes the fit, the "
+                    "other lines in its k column), b value ± U with its own k = t(ν_eff); ARW, a "
+                    "dispersion, by its one-sided χ² upper bound alone, p = 95 % (ν from the "
+                    "dwells' χ² under white rate noise, the order and the temperature reading, "
+                    "ν = ½(N/u_c)²; corrected for half the bias instability's full-band lift, "
+                    "the other half in u_c), no k. U includes the fit, the "
                     "model order (the spread of the candidate orders' values at the point) and "
                     "the temperature reading; the bias is {bias}. The polynomial coefficients "
                     "below are information, not certified values.",
                     "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
                     "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
                     "每格一个表述，包含概率 p = " + P_STATED + " %：K 为界限条件区间（U = a + k·u，a = |K| × 速率误差界限；"
-                    "k 列为其他分量的 k），b 与 ARW 为 值 ± U，各自的 k = t(ν_eff)。U 含拟合、模型阶次（各候选阶次"
+                    "k 列为其他分量的 k），b 为 值 ± U，其 k = t(ν_eff)；ARW 为离散度，仅以单侧 χ² 上限表述，"
+                    "p = 95 %（ν 由白噪声下各段的 χ²、模型阶次及温度读数给出，ν = ½(N/u_c)²；按零偏不稳定性"
+                    "全频带抬升的一半修正，另一半计入 u_c），无 k。U 含拟合、模型阶次（各候选阶次"
                     "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
     "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
                        "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
@@ -195,6 +208,10 @@ READINGS_TAKEN_ZH = (
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
     "（论文 §6.1）；校准值为各温度设定点与电源电压下的 K、b 及 ARW，阶次选择的影响计入 U，"
     "多项式系数仅供参考。",
+    "各设定点的 ARW：为离散度（静态测量段的样本标准差），仅以单侧 χ² 区间 [0, N·√(ν/χ²_0.05,ν)] 表述，"
+    "p = 95 %，无 k：ν 由白噪声（角速率白噪声，各段 ν = n − 1）下各段的 χ² 经拟合传递，并计入模型阶次"
+    "与温度读数分量，ν = ½(N/u_c)²；零偏不稳定性对各段方差的抬升（B̂ 取自静态数据 Allan 偏差的平底）"
+    "按其全频带闪烁噪声值的一半修正，另一半计入 u_c。",
 )
 
 #: The matrices the DCC writes as lists (name, item keys row by row).
@@ -214,7 +231,8 @@ NORM = ("Gyro triad alignment (gonio method) with IEC 62047-20:2014 5.2 "
 
 #: The readings taken in Chinese by their opening words (the DCC's zh beside the English).
 READINGS_ZH = dict(zip(("Alignment:", "Uncertainties:", "Residual leakage after alignment:",
-                        "Averaging time:", "Temperature model:"), READINGS_TAKEN_ZH))
+                        "Averaging time:", "Temperature model:", "ARW at the set points:"),
+                       READINGS_TAKEN_ZH))
 
 #: The items' and matrices' names in Chinese (gonio.report.i18n.phrase_zh), for the DCC.
 PHRASES_ZH = (

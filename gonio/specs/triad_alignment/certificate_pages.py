@@ -187,7 +187,7 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
         th, uv = c["theta_range_c"], c["supply_range_v"]
         out.append(Block("sub", T("sub_channel", ch=ch, lo=f"{th[0]:.1f}", hi=f"{th[1]:.1f}",
                                   ulo=f"{uv[0]:+.2f}", uhi=f"{uv[1]:+.2f}")))
-        out += certified_point_blocks(res, ch, c, T)
+        out += certified_point_blocks(res, ch, c, T, lang)
         rows = []
         for name, part in (("K", "scale"), ("b", "bias"), ("ARW", "arw")):
             f = c.get(part)
@@ -244,9 +244,10 @@ def _k_of(res: dict, key: str):
     return num(res, f"items.{key}.uncertainty.k", "k")
 
 
-def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
+def certified_point_blocks(res: dict, ch: str, c: dict, T, lang: str = "en") -> list[Block]:
     """The certified values of gyro ``ch``: K and b at every set point (rows) and supply
-    level (a value ± U and a k column each), ARW at every set point — the items
+    level (a value ± U and a k column each), ARW at every set point (a dispersion: its
+    value, its one-sided χ² upper bound with p and the ν of that χ², no k) — the items
     ``K_<ch>_t<i>_v<j>``, ``b_<ch>_t<i>_v<j>``, ``ARW_<ch>_t<i>``."""
     items = res["items"]
     pts = [p for p in c.get("certified_points", ()) if p["model"] == "K"]
@@ -281,11 +282,33 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
             "id": f"points-{name}-{ch}"}))
     arw = [(i, t) for i, t, _ in temps if f"ARW_{ch}_t{i}" in items]
     if arw:
-        out.append(Block("table", (["T (°C)", "ARW (°/√h) ± U", "k"], [
-            [display("sig3", t), _pm(res, f"ARW_{ch}_t{i}"),
-             num(res, f"items.ARW_{ch}_t{i}.uncertainty.k", "k")] for i, t in arw]),
-            {"widths": (0.3, 0.45, 0.25), "id": f"points-ARW-{ch}"}))
+        out.append(Block("table", (["T (°C)", "ARW (°/√h)", T("arw_upper"), T("nu")],
+                                   [[display("sig3", t)] + _arw_cells(res, f"ARW_{ch}_t{i}", lang)
+                                    for i, t in arw]),
+                         {"widths": (0.2, 0.25, 0.4, 0.15), "id": f"points-ARW-{ch}"}))
+        # its budget's u_c (the DCC states it beside the interval), one row per set point
+        out.append(Block("p", [T("arw_budget")]))
+        out.append(Block("table", (["T (°C)", "u_c (°/√h)", T("nu")], [
+            [display("sig3", t), num(res, f"items.ARW_{ch}_t{i}.uncertainty.u_c", "sig2"),
+             num(res, f"items.ARW_{ch}_t{i}.uncertainty.nu_eff", "nu")]
+            for i, t in arw if res["items"][f"ARW_{ch}_t{i}"]["measured"]]),
+            {"widths": (0.3, 0.4, 0.3), "id": f"points-ARW-budget-{ch}"}))
     return out
+
+
+def _arw_cells(res: dict, key: str, lang: str) -> list:
+    """An ARW item's cells by the one statement rule (:func:`item_nums`): its value, its one
+    statement ("≤ upper (p = 95 %)": the one-sided χ² interval [0, upper]) and the ν of that
+    χ²; an item stated by U (a result written before ARW was a dispersion) gives
+    "value ± U (k = …)" and its ν_eff. Its u_c is in the budget table below it."""
+    it = res["items"][key]
+    if not it["measured"]:
+        return ["—", "—", "—"]
+    n = item_nums(it, f"items.{key}", sig=6)
+    if n["statement"].interval is not None:
+        return [n["value"] or "—", n["statement"].interval_text(lang, short=True),
+                n["nu"] or "—"]
+    return [n["value"] or "—", _pm(res, key, with_k=True), n["nu"] or "—"]
 
 
 def _figure_series(result) -> dict:

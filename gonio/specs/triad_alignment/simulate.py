@@ -72,15 +72,18 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
                   criterion: str = "bic", draw: bool = True) -> dict[str, dict]:
     """One simulated programme (the chamber programme and, for its static record, the
     alignment session) identified as ``calibrate`` does, every certified thermal value
-    (``K_z_t1_v2``, ``b_z_t3_v1``, ``ARW_z_t2`` …) against the bench's closed-form truth
+    (``K_z_t1_v2``, ``b_z_t3_v1``, ``ARW_z_t2`` …; an ARW value stated by its one-sided χ²
+    interval carries {interval, nu}, :func:`gonio.analysis.coverage.stated_record`) against
+    the bench's closed-form truth
     (``SPEC.truth``, :mod:`gonio.specs.triad_alignment.truth`, from
     :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`): {key: {clause, value, truth, U,
     u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`. ``draw``: the
     rate table's errors drawn from the seed (:func:`for_trial`; its rate error scales every
     K) and the K values carry the table's Type B line as ``calibrate`` gives it; False: the
     bench file's table in every trial."""
-    from gonio.specs.triad_alignment.calibration import (fit_alignment, thermal_items,
-                                                         thermal_long_term)
+    from gonio.analysis.coverage import stated_record
+    from gonio.specs.triad_alignment.calibration import (fit_alignment, thermal_flicker,
+                                                         thermal_items, thermal_long_term)
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 
     from gonio.specs.triad_alignment.truth import truth
@@ -96,8 +99,10 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
     true = truth(b, p)                          # SPEC.truth: one truth hook
     out = {}
     for key, it in thermal_items(th, "", thermal_long_term(al, ra, th),
-                                 r.table_metadata("rate_table_u_rel")).items():
+                                 r.table_metadata("rate_table_u_rel"),
+                                 flicker=thermal_flicker(al, ra, th)).items():
         out[key] = {"clause": it.clause, "value": float(it.value),
                     "truth": float(true[key]["value"]),
-                    "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
+                    "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
+                    **stated_record(it.uncertainty)}
     return out

@@ -63,7 +63,8 @@ MAX_ORDER_T, MAX_ORDER_U, MAX_ORDER_ARW = 4, 2, 2
 # --------------------------------------------------------------------------- data
 def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.DataFrame:
     """One row per ± pair of soak dwells: channel, ϑ, U, K, b (°/s), ARW (°/√h) of the
-    static dwell that follows at the same supply (NaN if none), time (s) — step 1 of the
+    static dwell that follows at the same supply (NaN if none; ``arw_n`` its samples, 0 if
+    none, ``arw_fs_hz`` their rate), time (s) — step 1 of the
     module docstring ([Vagner2015] §5.2.3–5.2.4: K from the ± difference, b from the mean
     with the Earth rate removed; whole revolutions, §5.3).
 
@@ -97,15 +98,17 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
             e = mean_earth_rate_ref(w_enu, a["up"], a["north0"], a["table_deg"], a["rate_dps"],
                                     a["duration_s"])[c]
             bias = 0.5 * (a[ch] + b[ch]) / kk - e
-            arw = math.nan
+            arw, arw_n = math.nan, 0
             if k + 2 < len(soak):
                 s = soak[k + 2]
                 if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
                     arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
+                    arw_n = int(s["n_samples"])
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
                         "chamber_c": 0.5 * (a["chamber_c"] + b["chamber_c"]),
                         "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
-                        "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"]),
+                        "arw_deg_sqrt_h": arw, "arw_n": arw_n, "arw_fs_hz": float(fs),
+                        "time_s": a["time_s"], "line": int(a["line"]),
                         "soak": int(a["soak"])})
             k += 2
         else:
@@ -637,6 +640,29 @@ def lag_interval(cost, grid, vals, tau: float, best: float, cost0: float, n: flo
     return lo, hi, bool(resolved)
 
 
+def flicker_lift_var(b_dps: float, n: int, fs_hz: float) -> float:
+    """Expected sample variance ((°/s)²) that a bias instability B (flicker, one-sided PSD
+    h/f with h = B²/π, IEEE 952 Annex C; the Allan floor 0.664·B) adds to the standard
+    deviation of one record of ``n`` samples at ``fs_hz`` when its band reaches the Nyquist
+    frequency: ∫₀^{fs/2} (h/f)·n/(n − 1)·(1 − D_n(f)²) df, D_n(f) = sin(π f n/fs)/(n sin(π f/fs))
+    the transfer of the record's mean (the sample variance keeps what the mean does not).
+    The largest lift a flicker of that B can give the record; none where its band ends below
+    1/(record length).
+
+    >>> v = flicker_lift_var(1.0, 600, 10.0)          # B = 1 °/s, 60 s at 10 Hz
+    >>> round(v * math.pi, 2)                          # the integral, in units of h
+    6.63
+    """
+    if not (b_dps > 0 and n > 1 and fs_hz > 0):
+        return 0.0
+    lnf = np.linspace(math.log(fs_hz / 2.0) - math.log(1e5 * n), math.log(fs_hz / 2.0), 20001)
+    x = np.pi * np.exp(lnf) / fs_hz
+    d = np.sin(n * x) / (n * np.sin(x))
+    g = n / (n - 1.0) * (1.0 - d * d)
+    integral = float(np.sum(0.5 * (g[1:] + g[:-1]) * np.diff(lnf)))    # ∫ (…) d ln f
+    return b_dps ** 2 / math.pi * integral
+
+
 # --------------------------------------------------------------------------- model
 @dataclass
 class ChannelModel:
@@ -696,12 +722,39 @@ class ChannelModel:
                     rec = fit.point(theta, uv)
                     rec["slope"] = float((fit.predict(theta + 0.01, uv)[0]
                                           - fit.predict(theta - 0.01, uv)[0]) / 0.02)
+                    if name == "ARW":
+                        rec["u_chi2"], rec["nu_chi2"] = self.arw_chi2(theta)
+                        rec["n_samples"] = int(np.median(self.points["arw_n"][self.points["arw_n"] > 1]))
+                        rec["fs_hz"] = float(self.points["arw_fs_hz"].iloc[0])
                     out.append({"model": name, "t": i, "v": j if name != "ARW" else 0,
                                 "setpoint_c": float(t_set),
                                 "supply_v": None if name == "ARW" else float(uv + reference_v),
                                 "theta_c": theta, "u_v": float(uv), "u_theta_c": u_th,
                                 "nu_theta": float(o.size - 1), **rec})
         return out
+
+    def arw_chi2(self, theta: float) -> tuple[float, float]:
+        """(u, ν) of the fitted ARW(ϑ) at ``theta`` from the white rate noise the procedure
+        assumes at the sample interval: each static dwell's ARW is s·√τ0/K with s the sample
+        standard deviation of its n samples, s²(n − 1)/σ² a χ² with ν_i = n − 1, so
+        u(ARW_i) = ARW_i/√(2ν_i) (JCGM 100 E.4.3; the fitted ARW_i in place of the reading).
+        The value at ϑ is Σ_i w_i ARW_i with w the least-squares weights gᵀ(XᵀX)⁻¹Xᵀ of the
+        selected order, so u² = Σ_i w_i² ARW_i²/(2ν_i) and ν = ½(ARW(ϑ)/u)² (the ν of a standard
+        deviation of that spread). The between-dwell scatter of the fit's residuals estimates
+        the same spread with a few degrees of freedom; the χ² gives it with the dwells' own."""
+        f = self.arw
+        pts = self.points[np.isfinite(self.points["arw_deg_sqrt_h"].to_numpy(float))
+                          & (self.points["arw_n"].to_numpy() > 1)]
+        if f is None or pts.empty:
+            return 0.0, math.inf
+        x = design(pts["theta_c"].to_numpy(float) / f.scale_t, np.zeros(len(pts)), f.n_t, 0)
+        g = design(np.atleast_1d(float(theta)) / f.scale_t, np.zeros(1), f.n_t, 0)[0]
+        w = g @ np.linalg.pinv(x)
+        fitted = x @ f.coef
+        var = float(np.sum(w ** 2 * fitted ** 2 / (2.0 * (pts["arw_n"].to_numpy(float) - 1.0))))
+        value = float(f.predict(theta)[0])
+        u = math.sqrt(max(var, 0.0))
+        return u, (0.5 * (value / u) ** 2 if u > 0 else math.inf)
 
     def compensate(self, outputs, theta_c, u_v=0.0, dtheta_dt=None) -> np.ndarray:
         """ω̂ = y/K̂(ϑ, U) − b̂(ϑ, U) (− γ dϑ/dt when given and a ramp term was fitted), °/s."""
