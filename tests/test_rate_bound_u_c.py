@@ -32,7 +32,13 @@ PINS = Path(__file__).resolve().parent / "data" / "pins"
 NS = {"dcc": DCC_NS, "si": SI_NS}
 #: the items into which the rate table's relative error enters (JJF 7.2.1, IEC 5.1.3.1, 5.1.3.2)
 BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"},
-               "iec62047-20": {"scale_factor", "initial_sf_variation"}}
+               "iec62047-20": {"scale_factor", "initial_sf_variation", "bias",
+                               "initial_bias_variation"}}
+#: The bounded lines of each bound item (IEC 5.3.3.1/5.3.3.2: the gyro's temperature error at
+#: T_BASE, the input axis's misalignment on the Earth rate, a_BASE's bounded part).
+BOUND_LINES = {"scale_factor": {"e_table", "e_TU"}, "initial_sf_variation": {"e_table", "e_TU"},
+               "bias": {"e_TU", "e_align", "e_a_bnd"},
+               "initial_bias_variation": {"e_TU", "e_align", "e_a_bnd"}}
 
 
 def gonio(*args, cwd: Path) -> None:
@@ -140,14 +146,17 @@ def test_legend_names_each_items_bounded_lines(cal):
     zh = interval_legend(res["items"], labels("zh"))
     for key in BOUND_ITEMS[cal["spec"]]:
         lines = set(res["items"][key]["details"]["bound_condition"]["a_lines"])
-        assert lines == ({"e_table"} if cal["spec"] == "jjf1535-2015" else {"e_table", "e_TU"})
+        assert lines == ({"e_table"} if cal["spec"] == "jjf1535-2015" else BOUND_LINES[key])
     if cal["spec"] == "jjf1535-2015":
         assert "(7.2.1: the rate table's error)" in page
         assert "（7.2.1：转台误差）" in zh
     else:
         assert ("(5.1.3.1, 5.1.3.2: the rate table's error and the gyro's temperature error "
-                "at the set point)") in page
-        assert "（5.1.3.1, 5.1.3.2：转台误差、陀螺在设定点的温度误差）" in zh
+                "at the set point; 5.3.3.1, 5.3.3.2: the gyro's temperature error at the set "
+                "point, the input axis's misalignment on the Earth rate and the scale "
+                "factor's bounded part)") in page
+        assert ("（5.1.3.1, 5.1.3.2：转台误差、陀螺在设定点的温度误差；5.3.3.1, 5.3.3.2：陀螺在设定点的"
+                "温度误差、输入轴对准误差对地球自转角速度的影响、标度因数的有界部分）") in zh
     assert "chamber's temperature error" not in page and "温箱温度误差）给出" not in zh
 
 
@@ -168,8 +177,8 @@ def test_iec_temperature_line_takes_the_coefficients_far_end(tmp_path_factory):
     tc = items["sf_temperature_coefficient"]
     assert tc["measured"]
     reach = (abs(tc["value"]) + tc["uncertainty"]["U"]) / 100          # %/°C → 1/°C
-    for key in BOUND_ITEMS["iec62047-20"]:
-        it = items[key]
+    for key in ("scale_factor", "initial_sf_variation"):       # a_BASE's T_c,SF (the bias's
+        it = items[key]                                        # β: test_rate_bound_statement)
         row, = [r for r in it["uncertainty"]["components"] if r["symbol"] == "e_TU"]
         want = abs(row["c"]) * _chamber_bound_c(c["text"]) * reach
         got = it["details"]["bound_condition"]["a_lines"]["e_TU"]
