@@ -323,8 +323,18 @@ def format_triad_readings(data: pd.DataFrame, metadata: dict) -> str:
         out.write(f"# {k}: {v}\n")
     w = csv.writer(out, lineterminator="\n")
     w.writerow(COLUMNS)
-    cols = [data[c].tolist() if c in data else [math.nan] * len(data) for c in COLUMNS]
-    for row in zip(*cols):
-        w.writerow([_cell(v) for v in row])
+    w.writerows(zip(*[_column_cells(data[c]) if c in data else [""] * len(data)
+                      for c in COLUMNS]))
     return out.getvalue()
+
+
+def _column_cells(col: pd.Series) -> list[str]:
+    """:func:`_cell` of every value of a column, a float or integer column's at once (the
+    same texts: its values are Python floats or ints)."""
+    vals = col.tolist()
+    if col.dtype.kind == "f":
+        return ["" if v != v else repr(v) for v in vals]
+    if col.dtype.kind in "iu":
+        return [str(v) for v in vals]
+    return [_cell(v) for v in vals]
 
