@@ -35,7 +35,9 @@ Which cells
     decimals, moved by at most one unit of the ``d``-th; a column whose values have no
     decimals at all is not marked. Until 2026-12-02 the bench marked its rate and triad
     files so, which moved the rate outputs by one step of their resolution and the certified
-    numbers by up to one printed digit; such files are recognised by their metadata only.
+    numbers by up to one printed digit; :func:`detect` still reads that mark
+    (:func:`legacy_columns`) beside the time mark, so such a file is recognised when its
+    metadata are deleted.
 How it is detected
     :func:`detect` reads a CSV file line by line, or a Parquet stream batch by batch, and
     stops at :data:`MAX_CELLS` distinct cells (at most :data:`MAX_ROWS` rows): a file's size
@@ -43,7 +45,9 @@ How it is detected
     cell once per distinct row context, counts the cells whose ``q`` has the parity of their
     bit (``k`` of ``n``) and computes the one-sided binomial tail ``P(K ≥ k)`` for
     ``K ~ Binomial(n, 1/2)``. The readings are the virtual bench's when ``n ≥``
-    :data:`MIN_CELLS` and that tail is at most :data:`ALPHA`.
+    :data:`MIN_CELLS` and that tail is at most :data:`ALPHA`. A rate or triad file with
+    times is tested twice, in ``time_s`` and in the measured columns the bench marked until
+    2026-12-02, each at :data:`ALPHA`/2 (Bonferroni: the file's level stays :data:`ALPHA`).
 False positives
     On readings not written by the bench, the bit of each distinct row context is a keyed
     pseudo-random function of cells the marked value is not part of, so each cell matches
@@ -154,6 +158,18 @@ def marked_columns(header) -> dict[int, str]:
     names = [str(h).strip().lstrip("\ufeff") for h in header]
     if TIME_COLUMN in names:            # every file with times: the mark moves no value
         return {j: n for j, n in enumerate(names) if n == TIME_COLUMN}
+    return {j: n for j, n in enumerate(names) if n in COLUMNS}
+
+
+def legacy_columns(header) -> dict[int, str]:
+    """{index: name} of the columns a rate or triad file with times was marked in before the
+    mark moved to ``time_s`` (its measured columns :data:`COLUMNS`; module docstring,
+    Which cells): read by :func:`detect` beside the time mark, so that such a file is still
+    recognised once its metadata are deleted. {} for an optical file or a file without
+    times (whose marked columns have not changed)."""
+    names = [str(h).strip().lstrip("\ufeff") for h in header]
+    if TIME_COLUMN not in names or any(n in OPTICAL_COLUMNS for n in names):
+        return {}
     return {j: n for j, n in enumerate(names) if n in COLUMNS}
 
 
@@ -317,7 +333,9 @@ class _Tally:
             self.cells.append((name, ctx, v))
         return len(self.cells) < MAX_CELLS and self.rows < MAX_ROWS
 
-    def result(self) -> dict:
+    def result(self, alpha: float = ALPHA) -> dict:
+        """The binomial test at level ``alpha`` (:data:`ALPHA` shared among the tests of
+        one file, :func:`_combined`)."""
         dec = {name: column_decimals(name, [v for n, _, v in self.cells if n == name])
                for name in set(self.cols.values())}
         n = k = 0
@@ -328,20 +346,47 @@ class _Tally:
             n += 1
             k += _q(v, d) % 2 == cell_bit(name, ctx)[0]
         p = tail_probability(k, n) if n >= MIN_CELLS else None
-        return {"virtual": p is not None and p <= ALPHA, "cells": n, "matching": k,
+        return {"virtual": p is not None and p <= alpha, "cells": n, "matching": k,
                 "p_value": p}
+
+
+def _tallies(header) -> list[_Tally]:
+    """The tests of a file with this header: its marked columns (:func:`marked_columns`)
+    and, for a rate or triad file with times, the columns the bench marked before
+    (:func:`legacy_columns`)."""
+    return [t for t in (_Tally(marked_columns(header)), _Tally(legacy_columns(header)))
+            if t.cols]
+
+
+def _combined(tallies: list[_Tally]) -> dict:
+    """One decision over a file's tests: each at :data:`ALPHA` divided by their number
+    (Bonferroni), so that a file not written by the bench is still flagged with probability
+    at most :data:`ALPHA`; the test with the smallest tail reported, its ``p_value``
+    multiplied by the number of tests (at most 1); ``tests``: each test's own count and
+    tail, with the columns it read."""
+    if not tallies:
+        return dict(_NONE)
+    m = len(tallies)
+    res = [t.result(ALPHA / m) for t in tallies]
+    best = min(res, key=lambda r: (r["p_value"] is None, r["p_value"] or 0.0))
+    p = best["p_value"]
+    return {**best, "virtual": any(r["virtual"] for r in res),
+            "p_value": None if p is None else min(1.0, m * p),
+            "tests": [{**r, "columns": sorted(set(t.cols.values()))}
+                      for t, r in zip(tallies, res)]}
 
 
 def _detect_lines(lines) -> dict:
     rows = _iter_rows(lines)
     first = next(rows, None)
     header = [] if first is None else [c.strip().lstrip("\ufeff") for c in first[1]]
-    tally = _Tally(marked_columns(header))
-    if tally.cols:
-        for _, cells in rows:
-            if len(cells) == len(header) and not tally.add(cells):
+    open_ = tallies = _tallies(header)
+    for _, cells in rows:
+        if len(cells) == len(header):
+            open_ = [t for t in open_ if t.add(cells)]
+            if not open_:
                 break
-    return tally.result()
+    return _combined(tallies)
 
 
 def detect_text(text: str) -> dict:
@@ -364,15 +409,17 @@ def _detect_parquet(path: Path) -> dict:
     import pyarrow.parquet as pq
     pf = pq.ParquetFile(path)
     names = pf.schema_arrow.names
-    tally = _Tally(marked_columns(names))
-    if not tally.cols:
+    open_ = tallies = _tallies(names)
+    if not tallies:
         return dict(_NONE)
     for batch in pf.iter_batches(batch_size=1 << 14):
         cols = [batch.column(j).to_pylist() for j in range(len(names))]
         for i in range(batch.num_rows):
-            if not tally.add([c[i] for c in cols]):
-                return tally.result()
-    return tally.result()
+            row = [c[i] for c in cols]
+            open_ = [t for t in open_ if t.add(row)]
+            if not open_:
+                return _combined(tallies)
+    return _combined(tallies)
 
 
 def detect(path) -> dict:
