@@ -230,6 +230,14 @@ def dcc_fields(doc: bytes, res: dict) -> dict:
             continue
         q = r.find(".//dcc:quantity", NS)
         real = q.find("si:real", NS)
+        if real is None and q.findtext("si:realListXMLList/si:labelXMLList", None, NS) \
+                == "intervalMin intervalMax":
+            # an item stated by its upper bound alone (its estimate below zero): the
+            # interval [0, bound] and its p, no value (the certificate states none)
+            lo, hi = q.findtext("si:realListXMLList/si:valueXMLList", None, NS).split()
+            p = re.search(r"p = (\S+) %", "".join(q.find("dcc:name", NS).itertext()))[1]
+            out[key] = {"interval": (lo, hi), "p": p, "factor": None}
+            continue
         note = " ".join(c.text for c in q.iter(etree.Comment))
         m = re.search(r"factor=([0-9.eE+-]+)", note)
         factor = Decimal(m.group(1)) if m else None

@@ -117,16 +117,23 @@ def test_below_zero_estimate_is_stated_by_its_upper_bound(cal):
     r = root.find(".//dcc:result[@id='result-scale_factor_nonlinearity']", NS)
     desc = " ".join(t.text for t in r.iterfind(".//dcc:description/dcc:content", NS))
     assert "bias-corrected estimate below zero" in desc
-    # the DCC states the certificate's statement, the interval [0, bound], with that bound
-    # as its si:value (the one number the certificate prints; never the negative estimate,
-    # which lies outside its own interval)
-    for key in below:
-        r = root.find(f".//dcc:result[@id='result-{key}']", NS)
-        v = r.find(".//si:real/si:value", NS).text
-        ci = r.find(".//si:coverageIntervalMU", NS)
-        lo, hi = (float(ci.find(f"si:{e}", NS).text) for e in ("intervalMin", "intervalMax"))
-        assert lo == 0.0 and not v.startswith("-") and float(v) == hi, (key, v, lo, hi)
-        assert hi == pytest.approx(res["items"][key]["upper_bound"]), key
+    # the DCC states the certificate's statement, the interval [0, bound], and no si:value:
+    # the certificate states no value (the bound is not one, and the negative estimate lies
+    # outside its own interval); its name says so and gives p
+    for lang in ("en", "zh"):
+        root = etree.parse(str(cal / lang / "certificate.dcc.xml")).getroot()
+        for key in below:
+            r = root.find(f".//dcc:result[@id='result-{key}']", NS)
+            assert r.find(".//si:real", NS) is None and r.find(".//si:value", NS) is None, key
+            q = r.find(".//si:realListXMLList", NS)
+            assert q.find("si:labelXMLList", NS).text == "intervalMin intervalMax"
+            lo, hi = (float(x) for x in q.find("si:valueXMLList", NS).text.split())
+            assert lo == 0.0 and hi == pytest.approx(res["items"][key]["upper_bound"]), key
+            names = [t.text for t in r.iterfind("dcc:data/dcc:quantity/dcc:name/dcc:content",
+                                                NS)]
+            assert any("upper bound alone" in n and "p = 95 %" in n for n in names), names
+            if lang == "zh":
+                assert any("仅以上限表述" in n and "p = 95 %" in n for n in names), names
 
 
 def test_minus_sign_on_the_certificate_only(cal):

@@ -172,14 +172,20 @@ BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the bounded er
                   "standard uncertainty of the item is certified")
 
 
-def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str) -> None:
+def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str,
+                      description: str | None = None) -> None:
     """An interval stated without a standard uncertainty (an item whose certificate states
     no u_c: :func:`gonio.report.item_dcc.u_c_certified` false; the optical E where each
     point's U = k·u + b carries the table's bound): a dcc:quantity holding its two ends as an si:realListXMLList labelled intervalMin,
     intervalMax, its p and what it is in the name (si:coverageIntervalMU requires an
-    si:valueStandardMU, which the certificate does not state)."""
+    si:valueStandardMU, which the certificate does not state). ``description``: a
+    dcc:description after the name. A non-negative item whose estimate fell below zero
+    may be written so too, with no si:value: a certificate that states it by its upper
+    bound alone states no value, and neither that bound nor the negative estimate is one."""
     q = element(d, "dcc:quantity", refType="basic_measurementUncertainty")
     text_element(q, "dcc:name", f"{name}: {what}; p = {p_text(p)} %")
+    if description:
+        text_element(q, "dcc:description", description)
     rl = element(q, "si:realListXMLList")
     element(rl, "si:labelXMLList", "intervalMin intervalMax")
     element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(e)) for e in ends))

@@ -154,11 +154,12 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
-        elif s["below_zero"]:     # its bound alone (si:value the bound it prints), and why
-            quantity(data, L[name], s["bound"], item["unit"],
-                     description="; ".join(d for d in (LABELS["below_zero"]["en"],
-                                                       _range_table_text(res, name, L)) if d),
-                     **kw)
+        elif s["below_zero"]:     # its interval [0, bound] alone, no si:value, and why
+            interval_quantity(data, L[name], s["interval"]["statement"].interval_ends,
+                              unit_dsi(item["unit"]), float(unc["p"]), BELOW_ZERO_INTERVAL,
+                              description="; ".join(
+                                  d for d in (LABELS["below_zero"]["en"],
+                                              _range_table_text(res, name, L)) if d))
         else:
             desc = ([_k_tilt_text(res, L), _k_table_text(res, L)] if name == "scale_factor"
                     else [_range_table_text(res, name, L)])
@@ -175,6 +176,12 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
 E_BOUND_INTERVAL = ("the coverage interval of the largest true |E_i|, each point's reach "
                     "k·u + b: u of the lines other than the table's, b the table's bound at "
                     "the point; no standard uncertainty of E is certified")
+
+
+#: What the interval of a non-negative item whose bias-corrected estimate fell below zero is
+#: (its DCC quantity's name; the certificate states the item by its upper bound alone)
+BELOW_ZERO_INTERVAL = ("stated by its upper bound alone, the interval [0, upper bound]: the "
+                       "bias-corrected estimate fell below zero; no value is stated")
 
 
 #: The DCC's own words around the certificate's K and E notes, in Chinese (a zh DCC writes
