@@ -155,11 +155,10 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
         elif s["below_zero"]:     # its interval [0, bound] alone, no si:value, and why
+            note = (LABELS["below_zero"]["en"], _range_table_text(res, name, L))
             interval_quantity(data, L[name], s["interval"]["statement"].interval_ends,
                               unit_dsi(item["unit"]), float(unc["p"]), BELOW_ZERO_INTERVAL,
-                              description="; ".join(
-                                  d for d in (LABELS["below_zero"]["en"],
-                                              _range_table_text(res, name, L)) if d))
+                              description="; ".join(d for d in note if d))
         else:
             desc = ([_k_tilt_text(res, L), _k_table_text(res, L)] if name == "scale_factor"
                     else [_range_table_text(res, name, L)])
