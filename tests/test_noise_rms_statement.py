@@ -19,12 +19,11 @@ from gonio.result.model import Uncertainty
 
 
 def _chi2_upper(s: float, u_c: float) -> tuple[float, float]:
-    """ν = ½(s/u_c)² (JCGM 100 E.4.3 read backwards) and σ's one-sided 95 % upper limit."""
+    """ν = ½(s/u_c)² (JCGM 100 E.4.3 read backwards) and σ's one-sided 95 % upper limit from
+    ν as stated, its integer part (no ∞ above 1000: the limit still moves with ν there)."""
     nu = 0.5 * (s / u_c) ** 2
-    nu_s = math.inf if nu > 1000 else max(1.0, math.floor(nu))
-    return nu, s * math.sqrt((nu if math.isinf(nu_s) else nu_s) / stats.chi2.ppf(0.05, nu if
-                                                                                  math.isinf(nu_s)
-                                                                                  else nu_s))
+    nu_s = max(1.0, math.floor(nu))
+    return nu, s * math.sqrt(nu_s / stats.chi2.ppf(0.05, nu_s))
 
 
 @pytest.mark.parametrize("s,u_c", [(1.0, 0.5), (48.0, 3.1), (0.0855, 2.6e-4), (2.0, 0.21)])
@@ -35,8 +34,11 @@ def test_dispersion_interval_is_the_chi2_upper_limit(s, u_c):
     assert u.nu_eff == pytest.approx(nu, rel=1e-12)
     assert u.interval[0] == 0.0 and u.interval[1] == pytest.approx(hi, rel=1e-10)
     assert u.U == pytest.approx(hi - s, rel=1e-9) and u.u_c == u_c
-    text = item_statement({"value": s, "unit": "°/s", "measured": True, "nonnegative": True,
-                           "uncertainty": u.to_json()}).text()
+    st = item_statement({"value": s, "unit": "°/s", "measured": True, "nonnegative": True,
+                         "uncertainty": u.to_json()})
+    text = st.text()
+    # the ν stated is the one the limit was computed with (0.0855/0.00026: ν = 54 067, not ∞)
+    assert st.nu_eff == str(max(1, math.floor(nu))), st.nu_eff
     assert " ± " not in text and "k =" not in text and "p = 95 %" in text, text
 
 
@@ -157,9 +159,10 @@ def test_iec_half_range_states_no_k_and_no_nu(iec_noisy):
     assert st.k is None and st.nu_eff is None and st.upper is not None
 
 
-def test_decision_on_a_chi2_interval_with_nu_stated_infinite():
-    """A noise rms's ν is often above 1000 (stated ∞): its decision takes σ's χ²
-    distribution with the computed ν, P(σ ≤ T) = χ²_ν.sf(ν s²/T²) (scipy), not an error."""
+def test_decision_on_a_chi2_interval_with_nu_above_1000():
+    """A noise rms's ν is often above 1000 (stated by its integer part, never ∞, as its
+    interval is computed): its decision takes σ's χ² distribution with that ν,
+    P(σ ≤ T) = χ²_ν.sf(ν s²/T²) (scipy), not an error."""
     from gonio.analysis.conformity import decide_items
     from gonio.result.model import Item, Result
 
@@ -171,5 +174,6 @@ def test_decision_on_a_chi2_interval_with_nu_stated_infinite():
                {}, {})
     (c,) = decide_items(r, [{"item": "broadband_noise", "upper": 0.0862}], {"rule": "guarded"})
     assert c.outcome == "pass", c
-    want = stats.chi2.sf(u.nu_eff * s * s / 0.0862 ** 2, u.nu_eff)
+    nu = math.floor(u.nu_eff)
+    want = stats.chi2.sf(nu * s * s / 0.0862 ** 2, nu)
     assert c.conformance_probability == pytest.approx(want, rel=1e-9)

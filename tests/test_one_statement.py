@@ -282,8 +282,15 @@ def test_items_csv_states_the_certificates_numbers(demo):
             assert row["value"] == pytest.approx(stated_value(it)) or (
                 pd.isna(row["value"]) and it["value"] < 0), key
             nu = u["nu_eff"]
+            # a χ² interval's ν: the one its limit is computed with, never ∞
+            chi2 = u.get("k_source") == "chi-square"
             assert (pd.isna(row["nu"]) if nu is None else
-                    row["nu"] == (math.inf if nu > 1000 else max(1, math.floor(nu)))), key
+                    row["nu"] == (math.inf if nu > 1000 and not chi2
+                                  else max(1, math.floor(nu)))), key
+            # u only where the certificate states u_c (not a bound-condition item's)
+            from gonio.report.stated import u_c_certified
+            assert (row["u"] == pytest.approx(u["u_c"]) if u_c_certified(it)
+                    else pd.isna(row["u"])), key
             continue
         assert pd.isna(row["interval_low"]) and pd.isna(row["interval_high"]), key
         assert row["U"] == pytest.approx(u["U"]) and row["k"] == pytest.approx(u["k"]), key

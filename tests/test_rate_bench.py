@@ -209,7 +209,10 @@ def test_jjf_noise_on_within_uncertainty(jjf_noise_on, key):
 
 def test_jjf_noise_on_arw(jjf_noise_on):
     """7.2.13's ARW is a dispersion stated by its one-sided χ² interval [0, upper] (no k):
-    the bench's ARW lies in it in at least 6 of 8 seeds."""
+    the bench's ARW lies in it in at least 6 of 8 seeds. A smoke test of the whole
+    calibration only (8 seeds cannot see a u(N) 5× too small: with u(N) cut to 0.2× it still
+    passed); the coverage and z spread that can are tests/test_arw_statement.py::
+    test_jjf_arw_statement_covers_the_bench_arw."""
     hits = 0
     for r, t in jjf_noise_on:
         u = r.items["angle_random_walk"].uncertainty
@@ -366,9 +369,11 @@ def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
     Carlo and the GUM interval checked against it (JCGM 101 8). A Gaussian-dominated budget
     (bandwidth) validates; ARW (7.2.13) and the threshold are stated by no GUM interval, so
     there is no Monte Carlo of one: ARW is a dispersion stated by its one-sided χ² 95 %
-    interval [0, N·√(ν/χ²_0.05,ν)], ν = ½(N/u_c)² (JCGM 100 E.4.3 read backwards), checked
-    here by scipy's χ² and by drawing s = σ·√(χ²_ν/ν) 10⁶ times (the interval covers σ in
-    95 % of them); the threshold is stated by the 95 % range of its outcome distribution (a
+    interval [0, N·√(ν/χ²_0.05,ν)], ν = ½(N/u_c)² (JCGM 100 E.4.3 read backwards) as stated
+    (its integer part), checked here by scipy's χ² (whether that interval covers the bench's
+    ARW, i.e. whether u_c is right, is tests/test_arw_statement.py::
+    test_jjf_arw_statement_covers_the_bench_arw: draws of s/σ from χ²_ν computed from the
+    item's own u_c only re-checked scipy's quantile, whatever u_c); the threshold is stated by the 95 % range of its outcome distribution (a
     discrete distribution, no GUM propagation): u_c is that distribution's standard
     deviation, recomputed here from the outcome probabilities in the item's details, and the
     interval holds the value. 10⁶ trials: the Monte Carlo's own error of a 95 % end, ≈
@@ -389,11 +394,9 @@ def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
     assert u.monte_carlo is None and u.k is None and u.k_source == "chi-square"
     nu = 0.5 * (arw.value / u.u_c) ** 2
     assert u.nu_eff == pytest.approx(nu, rel=1e-12)
-    nu_k = nu if nu > 1000 else max(1, math.floor(nu))      # ν as stated (GUM G.6.4)
+    nu_k = max(1, math.floor(nu))      # ν as stated and as the limit is computed from
     upper = arw.value * math.sqrt(nu_k / chi2.ppf(0.05, nu_k))
     assert u.interval[0] == 0.0 and u.interval[1] == pytest.approx(upper, rel=1e-12)
-    draws = np.sqrt(np.random.default_rng(1).chisquare(nu_k, 1_000_000) / nu_k)  # s/σ
-    assert np.mean(1.0 <= draws * upper / arw.value) == pytest.approx(0.95, abs=0.002)
     th = r2.items["threshold"]
     assert th.uncertainty.monte_carlo is None and th.uncertainty.k is None
     pmf = th.details["outcome_pmf"]

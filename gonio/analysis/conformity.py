@@ -56,7 +56,7 @@ from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interva
                               check_one_limit_per_item, check_symmetric)
 from gonio.result.model import Conformity
 from gonio.result.statement import (decimals_for_sig, given_text, is_magnitude_statement,
-                                    item_statement, stated_nu)
+                                    item_statement, stated_nu, chi2_nu)
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -419,14 +419,14 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
                 k=f"{float(unc.k):.3g}", source=unc.k_source,
                 decided=NON_NORMAL_K_DECIDED.get(rule.kind, "y ± U"))
         # ν as stated (integer part, stated_nu): the ν of the χ² interval beside the value
-        chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None and no_p is None
+        nu_chi2 = (stated_nu(unc.nu_eff) if unc.interval is not None and no_p is None
                    and unc.nu_eff is not None and math.isfinite(unc.nu_eff)
                    and unc.nu_eff > 0 and it.value > 0 else None)
         y, U, dec, _ = stated_value_of(it)
         c = decide(key, float(y), float(U), float(unc.k), bounds, rule,
-                   chi2_nu=chi2_nu, no_probability=no_p)
+                   chi2_nu=nu_chi2, no_probability=no_p)
         raw = decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
-                     chi2_nu=chi2_nu, no_probability=no_p)
+                     chi2_nu=nu_chi2, no_probability=no_p)
         c = replace(stricter_of(c, raw, it.value),
                     **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds, dec))
     c = replace(c, limits_from=origin)
@@ -592,9 +592,19 @@ def stated_value_of(it) -> tuple[Decimal, Decimal, int, str]:
     return value, max(hi - value, Decimal(0)), dec, st.value_text
 
 
-def interval_guard_U(lo: Decimal, hi: Decimal) -> Decimal:
+def interval_guard_U(lo: Decimal, hi: Decimal, value: Decimal | None = None) -> Decimal:
     """U of the guard band w = r·U of an item stated by its 95 % interval [lo, hi] alone: the
-    interval's half-width (hi − lo)/2.
+    interval's half-width (hi − lo)/2; for the one-sided χ² upper bound [0, b] of a standard
+    deviation (``value``: its stated estimate s, given only for such an item) the reach of
+    the bound above the estimate, b − s.
+
+    A χ² bound is the interval of σ's own distribution about s (s·√(ν/χ²₀.₀₅,ν), the U of
+    :func:`gonio.result.gum.std_dev_uncertainty`), not a centre ± U: its half-width b/2 would
+    be, for a large ν, many times the statement's reach above s (ARW ≤ 1.826 with s = 1.808:
+    b/2 = 0.913, b − s = 0.018), and r > 1 would then reject an item whose bound lies well
+    within the limit while its χ² probability of conformance is 100 %. Both b and s are
+    printed (s·√(ν/χ²) fixes b/s), so the same printed statement still gets the same
+    decision.
 
     Such an item has no k (its distribution is not symmetric about its estimate), so the only
     U its statement gives is the one that states the same interval as centre ± U:
@@ -602,21 +612,26 @@ def interval_guard_U(lo: Decimal, hi: Decimal) -> Decimal:
     expanded uncertainty of the result as stated, and JCGM 106:2012 8.3.2 the acceptance
     interval [T_L + w, T_U − w] for the stated result: applied to that centre, r = 1 accepts
     exactly when the whole stated interval lies within the tolerance, and r > 1 moves each
-    end in by (r − 1)·U. A one-sided bound [0, b] of a non-negative quantity is the same
-    rule with U = b/2. Being a function of the two printed ends alone, the same printed
-    interval always gets the same decision (an unprinted bias-corrected estimate no longer
-    enters).
+    end in by (r − 1)·U. A one-sided bound [0, b] of a non-negative quantity that is not a
+    χ² bound is the same rule with U = b/2. Being a function of the printed numbers alone,
+    the same printed interval always gets the same decision (an unprinted bias-corrected
+    estimate no longer enters).
 
     >>> interval_guard_U(Decimal("0.066"), Decimal("0.205"))
     Decimal('0.0695')
+    >>> interval_guard_U(Decimal("0"), Decimal("1.826"), Decimal("1.808"))
+    Decimal('0.018')
     """
+    if value is not None:
+        return max(hi - value, Decimal(0))
     return (hi - lo) / 2
 
 
 def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
                       magnitude: bool) -> Conformity:
     """The decision of an item stated by its 95 % interval alone, on what its statement
-    prints (:func:`stated_interval_of`): the value v, the interval [lo, hi], U its half-width
+    prints (:func:`stated_interval_of`): the value v, the interval [lo, hi], U its half-width,
+    or for a standard deviation's one-sided χ² bound the bound's reach above v
     (:func:`interval_guard_U`).
 
     * simple (ILAC-G8 4.2.1, w = 0): pass when v lies within the tolerance;
@@ -638,7 +653,9 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     """
     unc = it.uncertainty
     v, lo, hi, dec, printed = stated_interval_of(it)
-    U = interval_guard_U(lo, hi)
+    chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
+        and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
+    U = interval_guard_U(lo, hi, v if chi2 else None)
     r = Decimal(repr(float(rule.guard_factor)))
     T_L = None if bounds.lower is None or magnitude else Decimal(repr(float(bounds.lower)))
     T_U = None if bounds.upper is None else Decimal(repr(float(bounds.upper)))
@@ -671,13 +688,8 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     measured = abs(float(it.value)) if magnitude else float(it.value)   # E: max|E_i|
     raw_v = raw_lo if v == lo and measured < float(unc.interval[0]) else D(measured)
     raw_outcome = outcome_of(raw_v, raw_lo, raw_hi)
-    chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
-        and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
     if chi2:
-        # ν as stated (integer part); stated ∞ (above 1000): the computed ν, as the interval
-        # itself keeps it (gonio.result.gum.dispersion_uncertainty)
-        nu = stated_nu(unc.nu_eff)
-        nu = float(unc.nu_eff) if math.isinf(nu) else nu
+        nu = chi2_nu(unc.nu_eff)        # as stated: the ν the interval was computed with
         p_c = conformance_probability_chi2(float(it.value), nu, bounds.lower, bounds.upper)
         model = f"chi-square, nu = {nu:g}"
     else:

@@ -399,17 +399,16 @@ def stated_record(u) -> dict:
     """An item stated by its interval alone (k None: a dispersion, range or extreme,
     :func:`gonio.result.statement.state_interval`): {"interval": [lo, hi], "nu": ν}, ν the
     degrees of freedom its one-sided χ² limit was computed with (:func:`gonio.result.gum.
-    std_dev_uncertainty`: ν; a specification's dispersion of few values: the stated ν,
-    :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
+    std_dev_uncertainty`: ν; a dispersion with its own budget: the stated ν,
+    :func:`gonio.result.statement.chi2_nu`, its integer part),
     None for an interval of another model (the half range's); {} for a value ± U."""
-    from gonio.result.statement import stated_nu
+    from gonio.result.statement import chi2_nu
 
     if u.k is not None or u.interval is None:
         return {}
     nu = None
     if u.k_source == "chi-square" and u.nu_eff is not None and math.isfinite(u.nu_eff):
-        ns = stated_nu(u.nu_eff)
-        nu = float(u.nu_eff) if math.isinf(ns) else ns
+        nu = chi2_nu(u.nu_eff)
     p = u.coverage_probability
     return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu,
             **({"p": float(p)} if p is not None and math.isfinite(float(p)) else {})}

@@ -326,20 +326,29 @@ LABELS: dict[str, dict[str, str]] = {
               "is the half-width of that interval as stated, (upper end − lower end)/2 "
               "(the interval is its centre ± U; not an uncertainty stated beside it), and w "
               "is applied to the interval's ends: each end is moved in by (r − 1)·U, so at "
-              "r = 1 the interval lies within the limits. Such an item is decided on the "
+              "r = 1 the interval lies within the limits; for a standard deviation stated by "
+              "its one-sided χ² bound U is the bound's reach above the estimate, upper end − "
+              "value (σ's χ² distribution about the estimate, whose probability of "
+              "conformance is given). Such an item is decided on the "
               "interval as printed; an accepted one lies above its interval's upper end with "
               "a probability of at most 1 − p = 5 % (the column “≤ 5 %”; a one-sided 95 % "
               "bound reaches that, an item stated y ± U with k for 95 % has at most 2.5 % at "
               "r = 1).",
         "zh": "以 95 % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为所给区间的半宽，"
               "（上端 − 下端）/2（区间即 中点 ± U；不是其旁给出的不确定度）；w 施加于区间的端点："
-              "两端各向内移 (r − 1)·U，r = 1 时区间位于规定限之内。此类项目按所印区间判定；"
+              "两端各向内移 (r − 1)·U，r = 1 时区间位于规定限之内；以单侧 χ² 上限表述的标准差，"
+              "U 为上限高出估计值的量，上端 − 值（σ 关于估计值的 χ² 分布，并给出其符合概率）。"
+              "此类项目按所印区间判定；"
               "判为合格者其被测量高于区间上端的概率至多为 1 − p = 5 %（表中“≤ 5 %”；单侧 95 % "
               "上限可达此值，以 y ± U（95 % 的 k）表述的项目在 r = 1 时至多 2.5 %）。"},
     "c_interval_band_item": {"en": "{name}: U = ({hi} − {lo})/2 {unit} = {U} {unit}, w = {w} "
                                    "{unit}",
                              "zh": "{name}：U = ({hi} − {lo})/2 {unit} = {U} {unit}，w = {w} "
                                    "{unit}"},
+    "c_interval_band_item_chi2": {"en": "{name}: U = {hi} − {v} {unit} = {U} {unit}, w = {w} "
+                                        "{unit}",
+                                  "zh": "{name}：U = {hi} − {v} {unit} = {U} {unit}，w = {w} "
+                                        "{unit}"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "pass": {"en": "pass", "zh": "合格"},
     "fail": {"en": "fail", "zh": "不合格"},
@@ -538,7 +547,8 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     ``"dec<N>"`` (N decimal places; see :func:`rule_at_U`), ``"pmdec<N>"`` (± and the
     magnitude at N decimals: the draft's E = ± max|E_i|), ``"sdec<N>"`` (with its sign),
     ``"k"`` (a coverage factor: 3 significant digits, :func:`k_text`), ``"nu"``
-    (ν_eff: its integer part, GUM G.6.4), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
+    (ν_eff: its integer part, GUM G.6.4; ∞ above 1000), ``"nuchi2"`` (the ν of a χ²
+    interval: its integer part, never ∞), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
     10^E: a statement's common power of ten),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
     ``"pos"`` (:func:`display_position`), ``"int"`` (nearest integer).
@@ -567,6 +577,8 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
         return k_text(value) or "—"
     if rule == "nu":
         return nu_text(value) or "—"
+    if rule == "nuchi2":
+        return nu_text(value, chi2=True) or "—"
     if rule.startswith("sci"):                  # "sci<E>.<N>": the mantissa at N decimals
         e, _, n = rule[3:].partition(".")       # × 10^E (a statement's common power of ten)
         e = int(e)

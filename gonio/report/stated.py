@@ -27,9 +27,11 @@ from typing import Any
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
 from gonio.result.text import measured_clause
-from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX,
-                                    K_SOURCE_SELECTED_MAX_BEFORE, decimals_for_sig,
-                                    given_text, round_half_up)
+from gonio.result.statement import (K_SOURCE_BOUND_PREFIX, K_SOURCE_CHI2,  # noqa: F401
+                                    K_SOURCE_MAX_ABS,
+                                    K_SOURCE_SELECTED_MAX, K_SOURCE_SELECTED_MAX_BEFORE,
+                                    decimals_for_sig, given_text, round_half_up,
+                                    u_c_certified)
 
 
 class NoBreakText(str):
@@ -163,11 +165,6 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
 #: the kinds of interval an item can be stated by, in the legend's order
 INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "own", "upper")
 
-#: ``k_source`` prefix of a bound-condition statement (an item whose equipment errors are
-#: taken at their bounds, plus k·u of the rest), :func:`interval_kind` "bound".
-K_SOURCE_BOUND_PREFIX = "U = a + k·u"
-
-
 def interval_kind(item: dict) -> str | None:
     """Which kind of 95 % interval states a results.json item (:data:`INTERVAL_KINDS`), from
     its own ``uncertainty.k_source`` (decided once, in the result): "chi2" (a standard
@@ -199,33 +196,6 @@ def interval_kind(item: dict) -> str | None:
                 K_SOURCE_SELECTED_MAX: "sel_max",
                 K_SOURCE_SELECTED_MAX_BEFORE: "sel_max"}.get(ks, "own")
     return "upper" if item.get("upper_bound") is not None else None
-
-
-def u_c_certified(it: dict) -> bool:
-    """Whether the certificate states the combined standard uncertainty u_c of ``it`` (a
-    results.json item, or a budget dict with its own ``u_c_certified`` flag), the one rule
-    every writer of a certificate, summary or DCC follows: not for a quantity stated by a
-    bound-condition interval — ``details.bound_condition``, or ``uncertainty.k_source``
-    "U = a + k·u" (value ± (a + k·u): the equipment's errors at their bounds, a, plus k·u of
-    the other lines), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
-    Its u_c (the JCGM 100 budget, the bounded lines as rectangular distributions) does not
-    hold those errors at their bounds: it is kept in results.json and shown in the budget
-    table marked "beside, not stated"; the DCC writes the interval's ends without an
-    si:valueStandardMU (:func:`gonio.report.dcc.interval_quantity`).
-
-    >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
-    (False, True)
-    >>> u_c_certified({"uncertainty": {"k_source": "U = a + k·u (bound condition)"}})
-    False
-    >>> u_c_certified({"u_c_certified": False}), u_c_certified({"u_c_certified": True})
-    (False, True)
-    """
-    if it.get("u_c_certified", True) is False:
-        return False
-    if (it.get("details") or {}).get("bound_condition"):
-        return False
-    ks = str((it.get("uncertainty") or {}).get("k_source") or "")
-    return not ks.startswith(K_SOURCE_BOUND_PREFIX)
 
 
 def bounded_lines_text(it: dict, L: dict) -> str:
@@ -358,7 +328,9 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
     """The note under a decision rule with a guard band naming, for each item decided on its
     95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the U of
     its guard band w = r·U: the half-width of the interval as stated,
-    (upper end − lower end)/2 (:func:`gonio.analysis.conformity.interval_guard_U`), printed
+    (upper end − lower end)/2, or for a standard deviation's χ² bound (``probability_model``
+    "chi-square…") the bound's reach above the stated estimate, upper end − value
+    (:func:`gonio.analysis.conformity.interval_guard_U`), printed
     exactly from the stated ends the Result stores (``stated_interval``, ``U``), so that no
     reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
     it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
@@ -369,20 +341,32 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
                 or not c.get("outcome") or c.get("U") is None or not c.get("stated_interval"):
             continue
         lo, hi = c["stated_interval"]
+        r = c.get("guard_factor") or 1.0
+        if str(c.get("probability_model") or "").startswith("chi-square") \
+                and c.get("stated_value") is not None:
+            # a standard deviation's χ² bound: U its reach above the estimate (interval_guard_U)
+            v = c["stated_value"]
+            rows.append(L.get("c_interval_band_item_chi2", "{name}: U = {U} {unit}").format(
+                name=name_of(key), unit=unit_of(key), U=_half_text(v, hi, 1.0, 1), hi=hi,
+                v=v, w=_half_text(v, hi, r, 1)).replace("  ", " "))
+            continue
         rows.append(L.get("c_interval_band_item", "{name}: U = {U} {unit}").format(
             name=name_of(key), unit=unit_of(key), U=_half_text(lo, hi), hi=hi, lo=lo,
-            w=_half_text(lo, hi, c.get("guard_factor") or 1.0)).replace("  ", " "))
+            w=_half_text(lo, hi, r)).replace("  ", " "))
     if not rows or "c_interval_band_note" not in L:
         return ""
     sep = "；" if L["c_interval_band_note"].startswith("以") else "; "
     return L["c_interval_band_note"].format(items=sep.join(rows))
 
 
-def _half_text(lo: str, hi: str, r: float = 1.0) -> str:
-    """r·(hi − lo)/2 of two stated ends (texts, maybe "×10⁻⁵"), exactly, as text.
+def _half_text(lo: str, hi: str, r: float = 1.0, parts: int = 2) -> str:
+    """r·(hi − lo)/2 of two stated ends (texts, maybe "×10⁻⁵"), exactly, as text;
+    ``parts`` 1: r·(hi − lo) (a χ² bound's reach above its stated estimate).
 
     >>> _half_text("0.066", "0.205"), _half_text("0", "0.000014", 2.0)
     ('0.0695', '0.000014')
+    >>> _half_text("1.8081", "1.8252", 1.5, 1)
+    '0.02565'
     >>> _half_text("1.555×10⁻⁴", "1.723×10⁻⁴")
     '8.4×10⁻⁶'
     """
@@ -392,7 +376,7 @@ def _half_text(lo: str, hi: str, r: float = 1.0) -> str:
     def dec(t: str) -> Decimal:
         m, _, e = t.replace("−", "-").partition("×10")
         return Decimal(m) * Decimal(1).scaleb(int(e.translate(sub)) if e else 0)
-    h = (dec(hi) - dec(lo)) / 2 * Decimal(repr(float(r)))
+    h = (dec(hi) - dec(lo)) / parts * Decimal(repr(float(r)))
     if h and ("×10" in lo + hi or abs(h.adjusted()) > 6):     # the ends' power-of-ten form
         e = h.adjusted()
         return f"{format(h.scaleb(-e).normalize(), 'f')}×10" + str(e).translate(
@@ -508,5 +492,7 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         if st.k is not None:
             out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
     if st.nu_eff is not None and (st.U is not None or st.interval is not None):
-        out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
+        # a χ² interval's ν: the one it was computed with, never ∞ (display rule "nuchi2")
+        chi2 = (it.get("uncertainty") or {}).get("k_source") == K_SOURCE_CHI2
+        out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nuchi2" if chi2 else "nu")
     return out

@@ -124,7 +124,8 @@ def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
     standard deviation is (:func:`std_dev_uncertainty`): by its one-sided χ² 95 % interval
     [0, s·√(ν/χ²_0.05,ν)] alone, with ν = ½ (s/u_c)² (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read
     backwards: the ν of a standard deviation whose χ² spread is u_c). ν is stated as its
-    integer part (∞ above 1000, the limit then keeps the computed ν). No k; U is the distance
+    integer part with no ∞ cap (:func:`gonio.result.statement.chi2_nu`), and the limit is
+    computed from that stated ν, so the ν printed beside it reproduces it. No k; U is the distance
     to the upper limit (the guard band of the decision,
     :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution with that
     ν). The budget's rows and u_c are kept. ``s`` not above 0 or no u_c: ``u`` as it is.
@@ -133,13 +134,12 @@ def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
     >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
     (119.9, None, [0.0, 53.78], 'chi-square')
     """
-    from gonio.result.statement import stated_nu
+    from gonio.result.statement import chi2_nu
 
     if not (s > 0 and u.u_c > 0):
         return u
     nu = 0.5 * (s / u.u_c) ** 2
-    nu_s = stated_nu(nu)
-    U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
+    U = std_upper_half_width(s, chi2_nu(nu))
     return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
                        interval=(0.0, s + U))
 

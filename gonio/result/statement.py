@@ -264,13 +264,35 @@ def stated_gum(r):
     return replace(r, k=k, U=k * r.u_c)
 
 
-def nu_text(nu: float | None) -> str | None:
+def chi2_nu(nu: float | None) -> float | None:
+    """ν of a standard deviation's one-sided χ² interval as stated and as the interval is
+    computed from (:func:`gonio.result.gum.dispersion_uncertainty`): the integer part, at
+    least 1, with no ∞ above :data:`NU_INFINITE`. That cap belongs to k = t_p(ν) alone,
+    where t_0.975(1000) ≈ z; the χ² upper limit s·√(ν/χ²_0.05,ν) still moves with ν there
+    (ν = 15 590: 1.0095·s; ν = ∞ would be s itself), so a certificate that printed "∞" beside
+    it would state a ν that does not reproduce its own limit. None when unknown or infinite.
+
+    >>> chi2_nu(49444.98), chi2_nu(2.4), chi2_nu(0.3), chi2_nu(math.inf), chi2_nu(None)
+    (49444.0, 2.0, 1.0, None, None)
+    """
+    if nu is None or not math.isfinite(float(nu)):
+        return None
+    return float(max(1, math.floor(float(nu))))
+
+
+def nu_text(nu: float | None, chi2: bool = False) -> str | None:
     """Effective degrees of freedom as stated (:func:`stated_nu`): the integer part, ∞ if
-    infinite or above :data:`NU_INFINITE`.
+    infinite or above :data:`NU_INFINITE`; ``chi2``: the ν of a χ² interval
+    (:func:`chi2_nu`: the integer part, never ∞).
 
     >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(13539172.0), nu_text(None)
     ('58', '∞', '3', '∞', None)
+    >>> nu_text(49444.98, chi2=True)
+    '49444'
     """
+    if chi2:
+        nu_c = chi2_nu(nu)
+        return None if nu_c is None else str(int(nu_c))
     nu_s = stated_nu(nu)
     if nu_s is None:
         return None
@@ -637,7 +659,7 @@ def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
 
 def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float | None = None,
                    p: float | None = None, unit: str | None = "",
-                   nonnegative: bool = False) -> Statement:
+                   nonnegative: bool = False, chi2: bool = False) -> Statement:
     """A value stated by its coverage interval [lo, hi] (a dispersion, range or extreme whose
     distribution is not symmetric about the estimate: χ² for a standard deviation, Monte
     Carlo for an extreme): no "± U" and no k, one interval with its probability.
@@ -695,7 +717,7 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     md = dec + exponent
     ht = _scaled(hr, exponent, md)
     return below_zero_bound(
-        Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff), p_text(p), unit_s,
+        Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff, chi2), p_text(p), unit_s,
                   upper=ht if one_sided else None, exponent=exponent, decimals=dec,
                   interval=(_scaled(lr, exponent, md), ht)), value, nonnegative)
 
@@ -781,11 +803,47 @@ def _get(obj, key: str, default=None):
     return getattr(obj, key, default)
 
 
+#: ``k_source`` prefix of a bound-condition statement (an item whose equipment errors are
+#: taken at their bounds, plus k·u of the rest), ``gonio.report.stated.interval_kind`` "bound".
+K_SOURCE_BOUND_PREFIX = "U = a + k·u"
+
+
+def u_c_certified(it) -> bool:
+    """Whether the certificate states the combined standard uncertainty u_c of ``it`` (a
+    results.json item or a :class:`gonio.result.model.Item`, or a budget dict with its own
+    ``u_c_certified`` flag), the one rule every writer of a certificate, summary, DCC or
+    ``tables/items.csv`` follows: not for a quantity stated by a
+    bound-condition interval — ``details.bound_condition``, or ``uncertainty.k_source``
+    "U = a + k·u" (value ± (a + k·u): the equipment's errors at their bounds, a, plus k·u of
+    the other lines), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
+    Its u_c (the JCGM 100 budget, the bounded lines as rectangular distributions) does not
+    hold those errors at their bounds: it is kept in results.json and shown in the budget
+    table marked "beside, not stated"; the DCC writes the interval's ends without an
+    si:valueStandardMU (:func:`gonio.report.dcc.interval_quantity`).
+
+    >>> u_c_certified({"details": {"bound_condition": {"U": 1.0}}}), u_c_certified({})
+    (False, True)
+    >>> u_c_certified({"uncertainty": {"k_source": "U = a + k·u (bound condition)"}})
+    False
+    >>> u_c_certified({"u_c_certified": False}), u_c_certified({"u_c_certified": True})
+    (False, True)
+    """
+    if _get(it, "u_c_certified", True) is False:
+        return False
+    if (_get(it, "details") or {}).get("bound_condition"):
+        return False
+    ks = str(_get(_get(it, "uncertainty"), "k_source") or "")
+    return not ks.startswith(K_SOURCE_BOUND_PREFIX)
+
+
 #: ``k_source`` of an item whose value is signed but whose statement is the coverage interval
 #: of the extreme of magnitudes max_i |x_i| (the optical draft's E = ± max|E_i|, 7.4): its
 #: ``U`` is the distance from that extreme to the interval's upper end, so the extreme is
 #: ``interval[1] - U``; the statement and the conformity decision take that extreme.
 K_SOURCE_MAX_ABS = "max-abs-interval"
+#: ``k_source`` of a standard deviation stated by its one-sided χ² interval
+#: (:func:`gonio.result.gum.std_dev_uncertainty`): its ν is stated by :func:`chi2_nu`.
+K_SOURCE_CHI2 = "chi-square"
 
 #: ``k_source`` of the largest of several standard deviations stated with the selection bias
 #: of its maximum removed (IEC 62047-20 5.1.3.7's max σ_i): its 95 % interval inverts each
@@ -850,7 +908,8 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
                                   nu_eff=_get(unc, "nu_eff"), p=p, unit=_get(item, "unit", ""),
                                   nonnegative=True)
         return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
-                              p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative)
+                              p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative,
+                              chi2=_get(unc, "k_source") == K_SOURCE_CHI2)
     return state(_get(item, "value") if measured else None, U if ok else None,
                  k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
                  p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,

@@ -19,8 +19,8 @@ import pandas as pd
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
-from gonio.result.statement import (K_SOURCE_MAX_ABS, coverage_k, item_statement,
-                                    p_text, stated_nu)
+from gonio.result.statement import (K_SOURCE_CHI2, K_SOURCE_MAX_ABS, chi2_nu, coverage_k,
+                                    item_statement, p_text, stated_nu, u_c_certified)
 
 ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "interval_low",
                 "interval_high", "measured", "conformity"]
@@ -62,13 +62,17 @@ def item_row(key: str, it) -> dict:
       max|x| interval, a non-negative quantity's [0, value + U]): ``interval_low`` and
       ``interval_high``, ``U`` and ``k`` empty (a reach beside an empty k reads as value ±
       U, a second statement); ``nu`` the interval's ν where the statement states a finite
-      one (an infinite ν, stored as None, leaves it empty); for an
+      one (an infinite ν, stored as None, leaves it empty; a standard deviation's χ² interval:
+      the ν it was computed with, :func:`~gonio.result.statement.chi2_nu`, never ∞); for an
       extreme of magnitudes (:data:`~gonio.result.statement.K_SOURCE_MAX_ABS`) ``value`` is
       the extreme max|x_i| the interval is of (the signed one stays in results.json); a
       non-negative quantity whose estimate fell below zero, stated by its upper bound
       alone, has ``value`` empty, as the certificate states no value (the signed estimate
       stays in results.json).
-    ``p`` is the coverage probability as stated (:func:`stated_p`), the unrounded one stays
+    ``u`` is the combined standard uncertainty u_c where the certificate states it, empty for
+    a bound-condition item (:func:`~gonio.result.statement.u_c_certified`: its quadrature
+    u_c is not certified; its ``nu`` is then the ν of the rest, ν_rest, as the certificate
+    prints it beside the interval). ``p`` is the coverage probability as stated (:func:`stated_p`), the unrounded one stays
     in results.json. A not-measured item has empty numbers."""
     row = {"item": key, "clause": it.clause, "value": None, "unit": it.unit, "u": None,
            "U": None, "k": None, "nu": None, "p": None, "interval_low": None,
@@ -84,7 +88,10 @@ def item_row(key: str, it) -> dict:
         st = item_statement(it)
     except GonioError:          # unstateable items are reported not measured (run_items)
         st = None
-    row.update(u=unc.u_c, p=stated_p(unc.coverage_probability))
+    # u_c only where the certificate states it (u_c_certified: not the quadrature u_c of a
+    # bound-condition item, which the certificate marks "beside, not stated")
+    row.update(u=unc.u_c if u_c_certified(it) else None,
+               p=stated_p(unc.coverage_probability))
     if st is not None and st.interval is not None:
         if unc.interval is not None:
             lo, hi = float(unc.interval[0]), float(unc.interval[1])
@@ -98,8 +105,8 @@ def item_row(key: str, it) -> dict:
         # results.json: the same row from the stored result)
         finite = (st.nu_eff is not None and unc.nu_eff is not None
                   and math.isfinite(float(unc.nu_eff)))
-        row.update(interval_low=lo, interval_high=hi,
-                   nu=stated_nu(unc.nu_eff) if finite else None)
+        nu = chi2_nu(unc.nu_eff) if unc.k_source == K_SOURCE_CHI2 else stated_nu(unc.nu_eff)
+        row.update(interval_low=lo, interval_high=hi, nu=nu if finite else None)
         return row
     if st is not None and st.U is None:      # stated without an uncertainty
         return row

@@ -1749,8 +1749,8 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
 def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
     """The one 95 % statement of a dispersion (B_s, R): the one-sided χ² interval of σ,
     [0, s·√(ν/χ²_0.05,ν)] (JCGM 100 E.4.3: ν s²/σ² ~ χ²(ν); :func:`uncertainty.stdev.
-    stdev_upper`), with ν as stated (:func:`gonio.result.statement.stated_nu`: the integer
-    part, so a reader recomputes the limit from the printed ν, never a narrower one).
+    stdev_upper`), with ν as stated (:func:`gonio.result.statement.chi2_nu`: the integer
+    part, never ∞, so a reader recomputes the limit from the printed ν, never a narrower one).
 
     One-sided because the draft's tolerances of B_s and R are upper limits and conformity is
     decided on the same model (:func:`gonio.analysis.conformity.conformance_probability_chi2`,
@@ -1764,10 +1764,11 @@ def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
     >>> round(chi_square_statement(1.0, 2.45)[1], 3)              # ν stated 2: √(2/0.1026)
     4.415
     """
-    from gonio.result.statement import stated_nu
+    from gonio.result.statement import chi2_nu
     from uncertainty.stdev import stdev_upper
 
-    return 0.0, stdev_upper(s, stated_nu(nu), COVERAGE_PROBABILITY)
+    n = chi2_nu(nu)
+    return 0.0, stdev_upper(s, nu if n is None else n, COVERAGE_PROBABILITY)
 
 
 def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:

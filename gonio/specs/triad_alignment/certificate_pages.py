@@ -290,10 +290,17 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T, lang: str = "en") -> 
         out.append(Block("p", [T("arw_budget")]))
         out.append(Block("table", (["T (°C)", "u_c (°/√h)", T("nu")], [
             [display("sig3", t), num(res, f"items.ARW_{ch}_t{i}.uncertainty.u_c", "sig2"),
-             num(res, f"items.ARW_{ch}_t{i}.uncertainty.nu_eff", "nu")]
+             num(res, f"items.ARW_{ch}_t{i}.uncertainty.nu_eff", _nu_rule(res, f"ARW_{ch}_t{i}"))]
             for i, t in arw if res["items"][f"ARW_{ch}_t{i}"]["measured"]]),
             {"widths": (0.3, 0.4, 0.3), "id": f"points-ARW-budget-{ch}"}))
     return out
+
+
+def _nu_rule(res: dict, key: str) -> str:
+    """The display rule of item ``key``'s ν: a χ² interval's is the ν its bound was computed
+    with, never ∞ ("nuchi2"); any other ν_eff "nu" (∞ above 1000, as k is computed)."""
+    ks = (res["items"][key].get("uncertainty") or {}).get("k_source")
+    return "nuchi2" if ks == "chi-square" else "nu"
 
 
 def _arw_cells(res: dict, key: str, lang: str) -> list:
