@@ -34,6 +34,10 @@ def register(sub) -> None:
                         "round")
     p.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                    help="an extra metadata line, e.g. latitude_deg=40.2 (repeatable)")
+    p.add_argument("--timezone", default=None, metavar="ZONE",
+                   help="the laboratory's IANA time zone (the records' setting timezone, e.g. "
+                        "Asia/Shanghai): the readings' # date: is its calendar date, and it "
+                        "is written as # timezone:; default: this computer's local zone")
     p.add_argument("--timeout", type=float, default=10.0,
                    help="seconds an instrument may take to answer (default 10)")
     p.set_defaults(func=run)
@@ -50,11 +54,16 @@ def _meta(items: list[str]) -> dict:
 
 
 def run(args) -> int:
+    from gonio.instruments.run import zone_info
     from gonio.pipeline.acquire import acquire
 
+    md = _meta(args.meta)
+    if args.timezone is not None:
+        zone_info(args.timezone)            # an IANA zone, else one line, exit 2
+        md["timezone"] = args.timezone
     res = acquire(args.protocol, {"table": args.table, "gyro": args.gyro,
                                   "chamber": args.chamber, "supply": args.supply},
-                  args.out, metadata=_meta(args.meta), resume=args.resume,
+                  args.out, metadata=md, resume=args.resume,
                   timeout_s=args.timeout)
     print(res.readings)
     print(res.io_log)

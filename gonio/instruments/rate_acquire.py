@@ -270,7 +270,7 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
             md[f"{role}_idn"] = drv.identify()
         check_rate_programme(segments, d["table"])
         md.update(_stated(d["gyro"], metadata))
-        md.update({"date": laboratory_date_text(),
+        md.update({"date": laboratory_date_text(zone=str(md.get("timezone") or "")),
                    "generator": f"gonio {__version__} acquire"})
         writer = ReadingsFile(path, md, rows, columns=RATE_COLUMNS)
         nominal = md.get("supply_nominal_v")

@@ -21,18 +21,38 @@ from gonio.atomic import write_text
 from gonio.errors import GonioError
 
 
-def laboratory_date_text(at: _dt.datetime | None = None) -> str:
+def laboratory_date_text(at: _dt.datetime | None = None, zone: str = "") -> str:
     """The readings' ``# date:``: the laboratory's calendar date (YYYY-MM-DD) at ``at`` (an
-    aware time; None: now), in the bench computer's local time zone (the ``TZ`` environment
-    variable, else the system's) — the laboratory's date, as the records' dates are
-    (``gonio.records.models.records_today``; their setting ``timezone`` unset is that zone),
-    not UTC's, which is the day before in Beijing until 08:00 (tests/test_acquisition_date.py).
+    aware time; None: now). One rule: the laboratory's time zone where it is known, ``zone``
+    (an IANA name: ``gonio acquire --timezone``, which writes it as the readings'
+    ``# timezone:``; give the records' setting ``timezone``, the zone every date of the
+    records is taken in, ``gonio.records.models.records_today``); else the bench computer's
+    local zone (the ``TZ`` environment variable, else the system's), which is the
+    laboratory's only where that computer is set to it. Never UTC's, which is the day
+    before in Beijing until 08:00 (tests/test_acquisition_date.py). An unknown ``zone`` is a
+    GonioError naming ``timezone``.
 
+    >>> laboratory_date_text(_dt.datetime(2026, 12, 1, 23, 30, tzinfo=_dt.timezone.utc),
+    ...                      "Asia/Shanghai")
+    '2026-12-02'
     >>> len(laboratory_date_text()), laboratory_date_text()[4]
     (10, '-')
     """
     at = _dt.datetime.now(_dt.timezone.utc) if at is None else at
-    return at.astimezone().strftime("%Y-%m-%d")
+    if not zone:
+        return at.astimezone().strftime("%Y-%m-%d")
+    return at.astimezone(zone_info(zone)).strftime("%Y-%m-%d")
+
+
+def zone_info(zone: str) -> _dt.tzinfo:
+    """The IANA time zone ``zone`` (zoneinfo), else a GonioError naming ``timezone``."""
+    import zoneinfo
+
+    try:
+        return zoneinfo.ZoneInfo(str(zone))
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError, TypeError):
+        raise GonioError(f"{str(zone)[:60]!r} is not a time zone of the IANA database (e.g. "
+                         "Asia/Shanghai, Europe/Berlin, UTC)", key="timezone") from None
 
 
 class ReadingsFile:

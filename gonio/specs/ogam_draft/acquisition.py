@@ -489,6 +489,8 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         check_programme(blocks, protocol, lim)
         md.update(_instrument_metadata(protocol, gyro, lim))
         md.update(metadata or {})
+        if md.get("timezone") and not (metadata or {}).get("date"):   # the laboratory's zone
+            md["date"] = laboratory_date_text(zone=str(md["timezone"]))
         writer = ReadingsFile(path, md, rows, COLUMNS)
         return _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start)
     except BaseException as exc:
