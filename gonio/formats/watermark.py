@@ -23,8 +23,9 @@ Which cells
     ``time_s`` column: the optical draft's readings and streams (a ``gyro_counts`` or
     ``gyro_deg`` column), the rate specifications' readings and the triad's readings and
     thermal readings. No measured value moves: the counts, angles, outputs and standard
-    deviations are written as the bench made them, so the mark changes no certified number
-    (tests/test_virtual_mark_numbers.py); a reading's time moves by at most 1 ns (a 60 °/s
+    deviations are written as the bench made them (tests/test_virtual_mark_numbers.py; a
+    Monte Carlo whose numerical error exceeds its printed digit can still print another
+    digit, docs/formats.md#watermark); a reading's time moves by at most 1 ns (a 60 °/s
     rotation turns 0.2 µ″ in it; the Earth rate 4·10⁻⁹ ″; 10⁻⁹ s of a rate programme's
     one-second clock), far below the bench's own timing. A rate or triad time moves only
     later, so that no reading leaves the time window a procedure selects it by from below.
