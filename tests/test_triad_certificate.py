@@ -515,7 +515,8 @@ def test_dcc_states_no_uncertainty_the_certificate_does_not(run, dcc_schema):
 def test_arw_is_stated_by_its_one_sided_chi2_bound_alone_everywhere(run):
     """ARW(ϑ) at a set point is a dispersion (the static dwells' sample standard deviations):
     one statement, the one-sided χ² 95 % interval [0, N·√(ν/χ²_0.05,ν)] with ν = ½(N/u_c)²
-    (computed here by scipy's χ² from the stored N and budget), no k, no "± U" — the same
+    (computed here by scipy's χ² from the stored N and budget, ν as stated: its integer part),
+    no k, no "± U" — the same
     upper end on the certificate's ARW table, in summary.txt, in the DCC (intervalMin 0,
     intervalMax, p 0.95) and in results.json's upper_bound. Its budget holds the dwells' χ²
     under white rate noise and the bias-instability lift correction (half the full-band
@@ -542,7 +543,8 @@ def test_arw_is_stated_by_its_one_sided_chi2_bound_alone_everywhere(run):
         u_c = math.sqrt(sum(c["u"] ** 2 for c in u["components"]))
         assert u["u_c"] == pytest.approx(u_c, rel=1e-12)
         nu = 0.5 * (it["value"] / u_c) ** 2
-        hi = it["value"] * math.sqrt(nu / chi2.ppf(0.05, nu))
+        nu_s = max(1, math.floor(nu))   # as stated and as the bound is computed, never ∞
+        hi = it["value"] * math.sqrt(nu_s / chi2.ppf(0.05, nu_s))
         assert u["interval"][0] == 0.0 and u["interval"][1] == pytest.approx(hi, rel=1e-9), key
         syms = [c["symbol"] for c in u["components"]]
         assert syms[:2] == [f"{key}_chi2", f"{key}_BI"], syms
