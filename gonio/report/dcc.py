@@ -299,12 +299,14 @@ def bilingual(doc: bytes, translate) -> bytes:
     return tree_bytes(root)
 
 
-def label_translator(extra: dict | None = None, tables=(), own: dict | None = None):
+def label_translator(extra: dict | None = None, tables=(), own: dict | None = None,
+                     openings=()):
     """``translate(text)`` for :func:`bilingual` (:func:`gonio.report.i18n.translator`;
-    ``own``: the specification's own labels)."""
+    ``own``: the specification's own labels; ``openings``: keys of ``extra`` that are the
+    opening words of a longer text)."""
     from gonio.report.i18n import translator
 
-    return translator(extra, tables, own)
+    return translator(extra, tables, own, openings)
 
 
 def _decimal_or_nan(v) -> str:

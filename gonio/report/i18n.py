@@ -757,6 +757,11 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     (rf"(.+): {_BOUND_INTERVAL_RE}; p = (\S+) %",
      "{1}：界限条件区间，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
+    # the parts of a per-item DCC's method after the specification's title ("<title>;
+    # protocol …; readings <file> (SHA-256 …, n rows)": its bracket and each part translated
+    # in turn)
+    (r"protocol (.+)", "校准方案 {1}"),
+    (r"readings (.+)", "读数文件 {1}"),
     (r"Statement of conformity: (.+)", "符合性声明：{1}"),
     (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance "
      r"interval (.+?); specific false-accept probability (.+?)(; false-reject probability "
@@ -855,11 +860,13 @@ def templates_of(table: dict) -> tuple[tuple["re.Pattern", str], ...]:
 _BRACKETED = re.compile(r"(.+?) \(([^()]*(?:\([^()]*\)[^()]*)*)\)", re.S)
 
 
-def translator(extra: dict | None = None, tables=(), own: dict | None = None):
+def translator(extra: dict | None = None, tables=(), own: dict | None = None, openings=()):
     """``translate(text)`` → its Chinese, or None (a zh DCC's texts beside the English,
     :func:`gonio.report.dcc.bilingual`; screening findings): the certificate labels' English
     → Chinese, the DCC's own texts (:data:`DCC_ZH`), ``extra`` (English → Chinese; a
-    key may be the opening words of a longer text, e.g. a note's "7.2.1:"), the phrase
+    key ending in ":", or one of ``openings``, may be the opening words of a longer text, a
+    note's "7.2.1:"; any other key is a whole text, so that a name's longer quantities,
+    "name (clause): … interval …; p = 95 %", are translated whole, not as the name), the phrase
     ``tables`` (:func:`phrase_zh`); then texts built from parts: the DCC
     phrases (:data:`DCC_PHRASES_ZH`) and the labels with fields, each part
     translated in turn, and "name (clause)" with its name translated. ``own``: the
@@ -874,8 +881,9 @@ def translator(extra: dict | None = None, tables=(), own: dict | None = None):
         if text in table:
             return table[text]
         for k, v in (extra or {}).items() if depth == 0 else ():
-            if len(k) < len(text) and text.startswith(k) and not k.isidentifier():
-                # a note known by its opening words ("7.2.1:"; not a bare name)
+            if len(k) < len(text) and (k.endswith(":") or k in openings) \
+                    and text.startswith(k):
+                # a note known by its opening words ("7.2.1:"; never a name)
                 return v
         if depth > 4:
             return phrase_zh(text, tables)

@@ -361,8 +361,16 @@ def dcc_translator(result, content_fn):
     for k, it in res.get("items", {}).items():
         if k in titles:
             extra[it["title"]] = titles[k]
-    for _, en, zh, _ in content_field(data, "GROUPS"):
+            # its quantity's name (rate_dcc: "<title> (<spec key> <clause>)"), whole: a
+            # clause may hold a bracket of its own ("5.4.5.1 b)")
+            extra[f"{it['title']} ({key} {it['clause']})"] = f"{titles[k]}（{it['clause']}）"
+    for _, en, zh, keys in content_field(data, "GROUPS"):
         extra[en] = zh
+        for k in keys:              # each result's name (rate_dcc: "<group>: <title> (<clause>)")
+            it = res.get("items", {}).get(k)
+            if it is not None and k in titles:
+                extra[f"{en}: {it['title']} ({it['clause']})"] = \
+                    f"{zh}：{titles[k]}（{it['clause']}）"
     heading = content_field(data, "HEADING")
     if heading:
         extra[heading[0]] = heading[1]
@@ -397,7 +405,8 @@ def dcc_translator(result, content_fn):
             extra[finding_text(f, labels("en"))] = finding_text(f, labels("zh"), phrases)
     # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
     own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
-    return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")))
+    return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")),
+                            openings=frozenset(content_field(data, "READINGS_ZH")))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",
