@@ -207,3 +207,43 @@ def test_the_check_can_fail(calibrated, tmp_path):
     """An English phrase slipped into a Chinese certificate is caught."""
     allowed = _allowed(calibrated, None)
     assert [w for w in WORD.findall("偏差 the scale factor") if w not in allowed]
+
+
+def test_every_budget_source_and_reason_in_chinese(calibrated):
+    """Every budget line's source of every rate item, those of u 0 included (the certificate's
+    budget table leaves them out, so the page test above cannot see them: on the small
+    programme JJF 7.2.9's t_w, "spread of the N records' times", is such a line), and every
+    not-measured reason, as the zh certificate writes them: no English word."""
+    from gonio.report.i18n import labels, reason_text
+    from gonio.report.rate_certificate import component_source
+    from gonio.specs import content_field, get
+
+    if calibrated["key"] not in ("jjf1535-2015", "iec62047-20"):
+        pytest.skip("the rate specifications' budget sources")
+    L, res = labels("zh"), _json(calibrated)
+    phrases = content_field(get(calibrated["key"]).content(), "PHRASES_ZH")
+    allowed = _allowed(calibrated, None)
+    seen = 0
+    for key, it in res["items"].items():
+        texts = [component_source(c, L, phrases)
+                 for c in (it.get("uncertainty") or {}).get("components") or []]
+        if not it["measured"]:
+            texts.append(reason_text(it["reason"], L, phrases))
+        for t in texts:
+            seen += 1
+            bad = sorted({w for w in WORD.findall(t) if w not in allowed})
+            assert not bad, f"{calibrated['key']} {key}: English words {bad} in {t!r}"
+    assert seen > 40
+
+
+def test_the_test_names_reason_in_chinese():
+    """An item not measured for want of its test's records (each rate specification's items)
+    says so in Chinese, the test's name kept as the readings write it."""
+    from gonio.report.i18n import labels, reason_text
+    from gonio.specs import content_field, get
+
+    for key in ("jjf1535-2015", "iec62047-20"):
+        zh = reason_text("no 'sf_temperature' records in the readings", labels("zh"),
+                         content_field(get(key).content(), "PHRASES_ZH"))
+        assert "sf_temperature" in zh and "读数中无" in zh, zh
+        assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"sf_temperature"}]

@@ -55,6 +55,9 @@ COMMON_PHRASES_ZH = (
     (r"scale factor, relative", "标度因数（相对）"),
     (r"spread over the power-ups", "各次上电之间的分散性"),
     (r"spread of the records", "各段记录的分散性"),
+    (r"spread of the (\d+) records' times, s/√N", "{1} 段记录时间的分散性，s/√N"),
+    # an item not measured for want of its test's records (each specification's items)
+    (r"no '(\w+)' records in the readings", "读数中无 {1} 试验的记录"),
     (r"cross-axis coupling of the Earth rate \(bound\)", "地球自转角速度的交叉轴耦合（界限）"),
     (r"sampling of a standard deviation", "标准偏差的抽样"),
     (r"interpolation between grid points", "网格点间插值"),
