@@ -11,8 +11,9 @@ uncertainty, the one rule of every writer (gonio.report.stated.u_c_certified):
 - the rate-table finding says the table is added linearly in those items;
 - IEC: the gyro's temperature line e_TU is the chamber's bound × (|T_c,SF/a| + U) of
   5.1.3.4's own statement (recomputed here from results.json's 5.1.3.4 item and the
-  readings' chamber metadata), and without 5.1.3.4 a flagged finding says the chamber's
-  effect on a_BASE is not bounded (never a silent 0).
+  readings' chamber metadata), and without 5.1.3.4 one flagged finding names every item
+  stated without the chamber's term (each whose interval narrows: never a silent 0);
+- the zh DCC translates each such item's value and interval quantity whole.
 """
 
 from __future__ import annotations
@@ -188,10 +189,25 @@ def test_iec_temperature_line_takes_the_coefficients_far_end(tmp_path_factory):
     assert not [f for f in c["res"]["findings"] if f["code"] == "chamber-effect-unbounded"]
 
 
-def test_iec_without_its_temperature_coefficient_says_the_chamber_is_unbounded(tmp_path):
-    from gonio.report.i18n import finding_text, labels
-    from gonio.specs.iec62047_20.certificate import PHRASES_ZH
+def _width(it: dict) -> float | None:
+    unc = it.get("uncertainty") or {}
+    if unc.get("interval"):
+        return unc["interval"][1] - unc["interval"][0]
+    return 2 * unc["U"] if unc.get("U") else None
 
+
+def test_iec_without_its_temperature_coefficient_names_every_item_it_narrows(tmp_path,
+                                                                            tmp_path_factory):
+    """The readings less their 5.1.3.4 rows, against the same readings whole: every item whose
+    interval narrows by more than 0.1 % (it lost the chamber's term: a_BASE and 5.1.3.2 their
+    e_TU, 5.1.3.5 and 5.1.3.6 the chamber's fluctuation × T_c,SF) is named in the one
+    finding, and every item named narrowed; the finding and 5.1.3.4's reason in Chinese
+    hold no English word."""
+    from gonio.report.i18n import finding_text, labels, reason_text
+    from gonio.specs.iec62047_20.certificate import PHRASES_ZH
+    from tests.test_zh_certificates import WHITELIST, WORD
+
+    whole = _run(tmp_path_factory, "iec62047-20")["res"]
     c = calibrated(tmp_path, "iec62047-20", drop_test="sf_temperature")
     res = c["res"]
     assert not res["items"]["sf_temperature_coefficient"]["measured"]
@@ -200,7 +216,43 @@ def test_iec_without_its_temperature_coefficient_says_the_chamber_is_unbounded(t
     assert len(found) == 1 and found[0]["action"] == "flagged", res["findings"]
     msg = found[0]["message"]
     assert "not bounded" in msg and "5.1.3.4" in msg and f"{_chamber_bound_c(c['text']):g} °C" in msg
-    assert "chamber-deviation effect on a_BASE is not bounded" in _plain(c["html"])
-    assert "chamber-deviation effect on a_BASE is not bounded" in c["summary"]
+    named = set(re.search(r"the intervals of (.+?) are stated without", msg).group(1).split(", "))
+    narrowed = set()
+    for key, it in res["items"].items():
+        w0, w1 = _width(whole["items"][key]), _width(it)
+        if key != "sf_temperature_coefficient" and w0 and w1 and w1 < w0 * (1 - 1e-3):
+            narrowed.add(it["clause"])
+    assert narrowed >= {"5.1.3.1", "5.1.3.2", "5.1.3.5", "5.1.3.6"}, narrowed
+    assert named == narrowed, (named, narrowed)
+    assert "temperature effect on the scale factor is not bounded" in _plain(c["html"])
+    assert "temperature effect on the scale factor is not bounded" in c["summary"]
+    ok = WHITELIST | {"sf_temperature"}
     zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
-    assert "温箱偏差对 a_BASE 的影响未给出界限" in zh and "chamber" not in zh
+    assert "温箱温度对标度因数的影响未给出界限" in zh and "5.1.3.6" in zh and "除以 a_BASE" in zh
+    assert not [w for w in WORD.findall(zh) if w not in ok], zh
+    why = reason_text(res["items"]["sf_temperature_coefficient"]["reason"], labels("zh"),
+                      PHRASES_ZH)
+    assert not [w for w in WORD.findall(why) if w not in ok], why
+
+
+def test_zh_dcc_names_the_interval_quantity_whole(cal):
+    """The zh DCC's Chinese of a bound-condition item's two quantities (its value and its
+    interval): the clause kept in both, the interval's "界限条件区间" and its p in the
+    second — not the item's bare title for both (a title is a whole text, never the opening
+    words of a longer one)."""
+    from gonio.report.dcc import BOUND_INTERVAL
+    from gonio.report.rate_certificate import dcc_translator
+    from gonio.result.model import Result
+
+    res = cal["res"]
+    translate = dcc_translator(Result.from_json(res), None)
+    texts = [el.text for el in cal["dcc"].iter(f"{{{DCC_NS}}}content") if el.text]
+    for key in BOUND_ITEMS[cal["spec"]]:
+        it = res["items"][key]
+        name = f"{it['title']} ({cal['spec']} {it['clause']})"
+        interval = f"{name}: {BOUND_INTERVAL}; p = 95 %"
+        assert name in texts and interval in texts, (name, texts)
+        zh_name, zh_interval = translate(name), translate(interval)
+        assert f"（{it['clause']}）" in zh_name and zh_name != zh_interval, zh_name
+        assert zh_interval.startswith(zh_name) and "界限条件区间" in zh_interval, zh_interval
+        assert zh_interval.endswith("p = 95 %"), zh_interval

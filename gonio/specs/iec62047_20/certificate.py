@@ -155,13 +155,15 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "标度因数（相对）：仅计速率转台分量（a_BASE 的 u_c 未知）：未给出证书标准不确定度，按 JJF 1535 "
      "表2 的 0.05 % 作矩形分布界限"),
     # the chamber-effect-unbounded finding (gonio.specs.iec62047_20.items.chamber_effect_finding)
-    (r"the chamber-deviation effect on a_BASE is not bounded: the scale-factor temperature "
-     r"coefficient of 5\.1\.3\.4 is not measured \((.+)\), so U\(a_BASE\) and U of 5\.1\.3\.2 "
-     r"hold no term for the gyro's temperature error at T_BASE \(± (\S+) °C: the chamber's "
-     r"deviation and its place in the volume\) — measure 5\.1\.3\.4 or state the "
-     r"coefficient's bound",
-     "温箱偏差对 a_BASE 的影响未给出界限：5.1.3.4 的标度因数温度系数未测得（{1}），故 U(a_BASE) 与 "
-     "5.1.3.2 的 U 不含陀螺在 T_BASE 处温度误差（± {2} °C：温箱偏差及其在容积内的位置）的分量——"
+    (r"the chamber's temperature effect on the scale factor is not bounded: the "
+     r"scale-factor temperature coefficient of 5\.1\.3\.4 is not measured \((.+)\), so the "
+     r"intervals of (.+?) are stated without a term for it \(the gyro's temperature error at "
+     r"T_BASE, ± (\S+) °C: the chamber's deviation and its place in the volume; the "
+     r"chamber's fluctuation between the points\), nor do the items divided by a_BASE "
+     r"through its u — measure 5\.1\.3\.4 or state the coefficient's bound",
+     "温箱温度对标度因数的影响未给出界限：5.1.3.4 的标度因数温度系数未测得（{1}），故 {2} 的区间"
+     "未计入该影响的分量（陀螺在 T_BASE 处的温度误差 ± {3} °C：温箱偏差及其在容积内的位置；"
+     "各点之间的温箱温度波动），除以 a_BASE 的各项经其不确定度亦不含该分量——"
      "请测量 5.1.3.4 或给出该系数的界限"),
     (r"half range of (\d+) records; interval from the distribution of the range of normal "
      r"values \(Tippett\)", "{1} 次记录的半极差；区间按正态值极差的分布求得"),

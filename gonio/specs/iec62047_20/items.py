@@ -51,6 +51,7 @@ class Context(RateContext):
     a_base_bound_rel: float = 0.0
     a_base_rest_u_rel: float | None = None
     a_base_rest_nu: float = math.inf
+    sf_tc_item: Item | None = None      # 5.1.3.4's item once computed (chamber_coefficient)
 
 
 def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:
@@ -214,7 +215,8 @@ def _u_rel_sf(ctx: Context, c: dict) -> list:
                    source="least-squares slope, from the noise of the point means"),
             rate_table_line("e_table", ctx.rate_table_u_rel, "rate table, relative"),
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
-            type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx) * abs(sf_tc_rel(ctx)),
+            type_b("e_TU", 0.0, gyro_temperature_bound_c(ctx)
+                   * abs(chamber_coefficient(ctx.sf_tc_item).rel or 0.0),
                    "rectangular", source=TEMPERATURE_BOUND_SOURCE + " × T_c,SF/a of 5.1.3.4's "
                                                                     "runs (0 without them)")]
 
@@ -230,68 +232,81 @@ def gyro_temperature_bound_c(ctx) -> float:
     return rg.gyro_temperature_bound_c(ctx.chamber_deviation_c, ctx.chamber_uniformity_c)
 
 
-def sf_tc_rel(ctx: Context) -> float:
-    """T_c,SF/a (1/°C): the least-squares slope of the 5.1.3.4 slopes against temperature
-    over their mean; 0 when the readings hold no such runs. The chamber realises T_BASE
-    only within its deviation bound, and a_BASE moves by this much per °C of it."""
-    if not ctx.has("sf_temperature"):
-        return 0.0
-    try:
-        runs = _sf_runs(ctx, "sf_temperature")
-        T, a = np.array([c["T"] for c in runs]), np.array([c["a"] for c in runs])
-        if len(set(T.tolist())) < 2:
-            return 0.0
-        return float(rg.least_squares_line(T, a)[0] / a.mean())
-    except (GonioError, ValueError, IndexError, KeyError):
-        return 0.0          # runs the 5.1.3.4 item itself refuses: no coefficient to use
+@dataclass(frozen=True)
+class ChamberCoefficient:
+    """T_c,SF/a_BASE of 5.1.3.4 (1/°C) as every budget that needs it takes it
+    (:func:`chamber_coefficient`): ``rel`` the estimate (the budgets' lines for the
+    chamber's deviation and fluctuation), ``bound`` |rel| + U (the bound condition's e_TU),
+    both None, with ``reason``, when 5.1.3.4 gives none."""
+
+    rel: float | None
+    bound: float | None
+    reason: str = ""
 
 
-def sf_tc_rel_bound(ctx: Context, a_base: float) -> tuple[float | None, str]:
-    """The bound of |T_c,SF/a| (1/°C) the bound condition takes for the gyro's temperature
-    error at T_BASE: |T_c,SF/a_BASE| + U(T_c,SF/a_BASE) of 5.1.3.4's statement
-    (:func:`sf_temperature`, its 95 % interval's far end: the estimate alone is no bound),
-    and ""; (None, why) when 5.1.3.4 is not measured (no runs, or the item refuses them) —
-    the chamber-deviation effect on a_BASE is then not bounded, which the calibration
-    states as a finding (:data:`CHAMBER_EFFECT_UNBOUNDED_CODE`), never a silent 0.
-    ``a_base``: the 5.1.3.1 slope, which 5.1.3.4 needs to be computed at all."""
-    try:
-        it = sf_temperature(ctx if ctx.a_base is not None else replace(ctx, a_base=a_base))
-    except (GonioError, ValueError, IndexError, KeyError) as e:
-        return None, str(e)
-    if not it.measured or it.value is None or not math.isfinite(it.value):
-        return None, it.reason or "no finite value"
-    unc = it.uncertainty
+def chamber_coefficient(tc: Item | None) -> ChamberCoefficient:
+    """The one decision whether the chamber's temperature effect on the scale factor is
+    bounded: from 5.1.3.4's item ``tc`` (:func:`sf_temperature`, computed once, before
+    5.1.3.1, and handed to every item in the context, :func:`with_needs`), in one form, the
+    item's 100·T_c,SF/a_BASE / 100, with its bound |T_c,SF/a_BASE| + U(T_c,SF/a_BASE) (its
+    95 % interval's far end: the estimate alone is no bound). None (and why) when 5.1.3.4 is
+    not measured (no runs, or the item refuses them), states no finite value or no
+    uncertainty: the items of :data:`CHAMBER_ITEMS` then hold no term for it, which the
+    calibration states as a finding naming each of them (:func:`chamber_effect_finding`,
+    from this same None), never a silent 0.
+
+    >>> chamber_coefficient(None).reason
+    '5.1.3.4 not computed'
+    """
+    if tc is None:
+        return ChamberCoefficient(None, None, "5.1.3.4 not computed")
+    if not tc.measured or tc.value is None or not math.isfinite(tc.value):
+        return ChamberCoefficient(None, None, tc.reason or "no finite value")
+    unc = tc.uncertainty
     if unc is not None and unc.U is not None:
-        reach = abs(it.value) + float(unc.U)
+        reach = abs(tc.value) + float(unc.U)
     elif unc is not None and unc.interval is not None:
         reach = max(abs(float(e)) for e in unc.interval)
     else:
-        return None, "5.1.3.4 states no uncertainty"
-    return reach / 100.0, ""          # the item is 100·T_c,SF/a_BASE in %/°C
+        return ChamberCoefficient(None, None, "5.1.3.4 states no uncertainty")
+    return ChamberCoefficient(tc.value / 100.0, reach / 100.0)   # the item is in %/°C
 
 
-#: The finding of an IEC calibration whose a_BASE has no bound for the chamber's deviation.
+#: The finding of an IEC calibration whose scale-factor items lack the chamber's term.
 CHAMBER_EFFECT_UNBOUNDED_CODE = "chamber-effect-unbounded"
+
+#: The items whose budgets take 5.1.3.4's coefficient (:func:`chamber_coefficient`) and
+#: hold no term for the chamber without it: a_BASE and 5.1.3.2 (the gyro's temperature
+#: error at T_BASE, e_TU), 5.1.3.5 and 5.1.3.6 (the chamber's fluctuation between the supply
+#: runs, between the points). 5.1.3.8 takes the fits' residual standard error instead (an
+#: upper bound that holds the fluctuation too), so it is not among them.
+CHAMBER_ITEMS = ("scale_factor", "initial_sf_variation", "ratiometric_error", "linearity")
 
 
 def chamber_effect_finding(items: dict, chamber_bound_c: float):
-    """A flagged finding where a_BASE (5.1.3.1) is measured but 5.1.3.4's T_c,SF is not
-    (:func:`sf_tc_rel_bound` None): U(a_BASE) and U(5.1.3.2) then hold no term for the
-    gyro's temperature error at T_BASE (the chamber's deviation and the place in its
-    volume, ± ``chamber_bound_c``); None otherwise."""
+    """A flagged finding where 5.1.3.4 gives no coefficient (:func:`chamber_coefficient`
+    None, the same decision the budgets took) and items of :data:`CHAMBER_ITEMS` are
+    measured: it names each of them, their intervals stated without the chamber's term
+    (the gyro's temperature error at T_BASE, ± ``chamber_bound_c``: the chamber's deviation
+    and its place in the volume; its fluctuation between the points), and that the items
+    divided by a_BASE take its u without it (a share below 0.1 % of their U on the small
+    programme: not named one by one); None otherwise."""
     from gonio.result.findings import Finding
 
-    sf, tc = items.get("scale_factor"), items.get("sf_temperature_coefficient")
-    if sf is None or not sf.measured or tc is None or tc.measured:
+    cc = chamber_coefficient(items.get("sf_temperature_coefficient"))
+    hit = [items[k].clause for k in CHAMBER_ITEMS if k in items and items[k].measured]
+    if cc.bound is not None or not hit:
         return None
     return Finding(CHAMBER_EFFECT_UNBOUNDED_CODE,
-                   f"the chamber-deviation effect on a_BASE is not bounded: the scale-factor "
-                   f"temperature coefficient of 5.1.3.4 is not measured ({tc.reason}), so "
-                   f"U(a_BASE) and U of 5.1.3.2 hold no term for the gyro's temperature "
-                   f"error at T_BASE (± {chamber_bound_c:g} °C: the chamber's deviation and "
-                   f"its place in the volume) — measure 5.1.3.4 or state the coefficient's "
-                   f"bound", "flagged", clause="5.1.3.1",
-                   rule="a_BASE's chamber-deviation effect bounded by 5.1.3.4's T_c,SF")
+                   f"the chamber's temperature effect on the scale factor is not bounded: the "
+                   f"scale-factor temperature coefficient of 5.1.3.4 is not measured "
+                   f"({cc.reason}), so the intervals of {', '.join(hit)} are stated without a "
+                   f"term for it (the gyro's temperature error at T_BASE, ± "
+                   f"{chamber_bound_c:g} °C: the chamber's deviation and its place in the "
+                   f"volume; the chamber's fluctuation between the points), nor do the items "
+                   f"divided by a_BASE through its u — measure 5.1.3.4 or state the "
+                   f"coefficient's bound", "flagged", clause="5.1.3.1",
+                   rule="the scale-factor items' chamber term bounded by 5.1.3.4's T_c,SF")
 
 
 def scale_factor(ctx: Context) -> Item:
@@ -299,8 +314,9 @@ def scale_factor(ctx: Context) -> Item:
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
     the rate table and the voltmeter (relative), and the gyro's temperature error at T_BASE
     (:func:`gyro_temperature_bound_c`: the chamber's deviation and the gyro's place in its
-    volume, bounds added) times T_c,SF/a (:func:`sf_tc_rel`). Stated by the bound condition
-    (:func:`_bound_statement`: e_TU, and the table where no certificate u is stated)."""
+    volume, bounds added) times T_c,SF/a (:func:`chamber_coefficient`). Stated by the bound
+    condition (:func:`_bound_statement`: e_TU, and the table where no certificate u is
+    stated)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
@@ -316,14 +332,14 @@ def scale_factor(ctx: Context) -> Item:
 def _bound_statement(ctx: Context, u, value: float):
     """The statement of an item with :func:`_u_rel_sf`'s budget, by the bound condition
     (:func:`gonio.specs._rate_family.rate_records.table_bound_statement`): the gyro's
-    temperature error at T_BASE (e_TU: the chamber's bound × :func:`sf_tc_rel_bound`,
-    |T_c,SF/a| + its U) is a bound the procedure allows (the chamber anywhere within its
+    temperature error at T_BASE (e_TU: the chamber's bound × :func:`chamber_coefficient`'s
+    bound, |T_c,SF/a| + its U) is a bound the procedure allows (the chamber anywhere within its
     deviation and uniformity, Table 2), so it is added linearly, not as a rectangular line
     (which covers as little as 84 % with the chamber at its bound); where the readings state
     no certificate u for the rate table, the table's bound (e_table) is added with it. With
     the table's u stated and e_TU 0 (5.1.3.4 not measured, which the calibration states as
     a finding, :func:`chamber_effect_finding`) the GUM budget's U = k·u_c."""
-    tc_bound, _ = sf_tc_rel_bound(ctx, _sf_runs(ctx, "scale_factor")[0]["a"])
+    tc_bound = chamber_coefficient(ctx.sf_tc_item).bound
     return table_bound_statement(u, value, ctx.rate_table_u_rel, {
         "e_table": TABLE2_RATE_ACCURACY_REL,
         "e_TU": gyro_temperature_bound_c(ctx) * (tc_bound or 0.0)})
@@ -355,8 +371,9 @@ def linearity(ctx: Context) -> Item:
     pooled noise of the point means through the line's residual / FullScale
     (:func:`linearity_noise_sd`), the bias drift between the points (:func:`linearity_drift_sd`,
     from the static record's noise fit) and the chamber's fluctuation × T_c,SF
-    (:func:`linearity_fluctuation_sd`). The value is the reading less the selection
-    midpoint (the largest of noisy |L_i| is raised by noise), within the interval; the
+    (:func:`linearity_fluctuation_sd`; none where 5.1.3.4 gives no coefficient,
+    :func:`chamber_coefficient`, the item then named in its finding). The value is the
+    reading less the selection midpoint (the largest of noisy |L_i| is raised by noise), within the interval; the
     standard's reading max |L_i| is kept in the details (``max_abs_L_i_pct``), and the
     GUM budget of the value at the largest point (its linearisation, value ± U, reached
     below zero for a linear gyro) stays in the budget table only."""
@@ -377,9 +394,10 @@ def linearity(ctx: Context) -> Item:
         extra["u_drift_pct"] = float(u_dr[i])
     except (GonioError, IndexError, KeyError):
         pass                            # no static record: the drift is not known
-    if ctx.has("sf_temperature"):      # T_c,SF known: the chamber's fluctuation moves K
+    k_rel = chamber_coefficient(ctx.sf_tc_item).rel
+    if k_rel is not None:       # T_c,SF known: the chamber's fluctuation moves K
         u_fl = 100 * linearity_fluctuation_sd(
-            c["x"], c["t"], fs, ctx.a_base, sf_tc_rel(ctx) * ctx.chamber_fluctuation_c,
+            c["x"], c["t"], fs, ctx.a_base, k_rel * ctx.chamber_fluctuation_c,
             ctx.chamber_fluctuation_period_s)
         extra["u_fluctuation_pct"] = float(u_fl[i])
 
@@ -482,8 +500,8 @@ def symmetry(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     s, aw, bw, ac, bc = ief.symmetry_iec(c["x"], c["y"], ctx.a_typ)
-    k_rel = sf_tc_rel(ctx)
-    if ctx.has("sf_temperature") and math.isfinite(c["u_a_cw"]) and math.isfinite(c["u_a_ccw"]):
+    k_rel = chamber_coefficient(ctx.sf_tc_item).rel
+    if k_rel is not None and math.isfinite(c["u_a_cw"]) and math.isfinite(c["u_a_ccw"]):
         # the two slopes' noise and drift, and the chamber's fluctuation moving K between
         # the CW and the CCW points (:func:`fluctuation_u_rel`)
         u_fl = fluctuation_u_rel(c["x"], c["t"], k_rel * ctx.chamber_fluctuation_c,
@@ -651,10 +669,12 @@ def sf_temperature(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.3 eq (4) and 5.1.3.4 eqs (5), (6): a(T_i) at the m + 1 temperatures,
     S_F,VAR,Ti = (a_Ti − a_BASE)/a_BASE, and the temperature coefficient T_c,SF = least-squares
     slope of a against T; reported as 100·T_c,SF/a_BASE in %/°C (reading taken), the slope
-    and the per-point variations in the details."""
+    and the per-point variations in the details. Computed before 5.1.3.1 (``NEEDS``): the
+    scale-factor items take their chamber term from it (:func:`chamber_coefficient`)."""
     t, cl, un = "scale-factor temperature coefficient", "5.1.3.4", "%/°C"
-    m = _miss(ctx, "sf_temperature", "sf_temperature_coefficient", t, cl, un)
-    if m:
+    m = _miss(ctx, "sf_temperature", "sf_temperature_coefficient", t, cl, un, need_a=False) \
+        or _miss(ctx, "scale_factor", "sf_temperature_coefficient", t, cl, un, need_a=False)
+    if m:           # the runs' drift converts by the 5.1.3.1 run's slope (_sf_runs)
         return m
     runs = _sf_runs(ctx, "sf_temperature")
     T = np.array([c["T"] for c in runs])
@@ -729,13 +749,14 @@ def ratiometric(ctx: Context) -> Item:
     slopes' noise and drift, and the chamber's temperature fluctuation moving K by T_c,SF
     between the supply runs, which follow one another at the one set point T_BASE
     (:func:`fluctuation_ratio_u_rel`; amplitude and period from the readings' metadata,
-    JJF Table 2's ±1 °C and a bound over any period when absent; none without the
-    5.1.3.4 runs, T_c,SF then unknown)."""
+    JJF Table 2's ±1 °C and a bound over any period when absent; none where 5.1.3.4 gives
+    no coefficient, :func:`chamber_coefficient`, the item then named in its finding)."""
     t, cl, un = "scale-factor ratiometric error (max |R|)", "5.1.3.5", "%"
     m = _miss(ctx, "ratiometric", "ratiometric_error", t, cl, un)
     if m:
         return m
     runs = _sf_runs(ctx, "ratiometric")
+    k_rel = chamber_coefficient(ctx.sf_tc_item).rel or 0.0   # None: named in the finding
     V = np.array([c["V"] for c in runs])
     a = np.array([c["a"] for c in runs])
     ib = int(np.argmin(np.abs(V - ctx.v_base)))
@@ -743,7 +764,7 @@ def ratiometric(ctx: Context) -> Item:
     def point(j):       # the signed R_Vj in % with its budget
         u_fl = 0.0 if j == ib else fluctuation_ratio_u_rel(
             runs[j]["x"], runs[j]["t"], runs[ib]["x"], runs[ib]["t"],
-            sf_tc_rel(ctx) * ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s)
+            k_rel * ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s)
         return gum(lambda ai, ab, f: 100 * ief.ratiometric_error_iec(ai * (1 + f), ab, V[j],
                                                                      V[ib]),
                    [from_u("a_Vi", a[j], runs[j]["u_a"], dof=runs[j]["nu_a"]),
@@ -829,7 +850,7 @@ def bias_tc_bound_dps_per_c(ctx: Context) -> float:
     """The bound of |β| ((°/s)/°C) the bias's bound condition takes for the gyro's
     temperature error at T_BASE: |β| + U(β) of 5.3.3.6's statement (:func:`bias_temperature`,
     its 95 % interval's far end: the estimate alone is no bound, as for a_BASE's
-    :func:`sf_tc_rel_bound`); 0 when the readings hold no 5.3.3.6 visits or the item refuses
+    :func:`chamber_coefficient`); 0 when the readings hold no 5.3.3.6 visits or the item refuses
     them (no coefficient to bound with: the line is then 0, as before)."""
     if not ctx.has("bias_temperature"):
         return 0.0
@@ -3023,10 +3044,13 @@ def max_outcome_upper_end(pmf: dict, m_b: float, s_b: float, lo: float, hi: floa
 
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
-    """The context of an item: the calibration's, with a_BASE from the scale-factor item
+    """The context of an item: the calibration's, with 5.1.3.4's item once computed (the
+    one source of :func:`chamber_coefficient`) and a_BASE from the scale-factor item
     (5.1.3.1) when it was measured, its relative u_c and the ν of that u_c
     (:func:`gonio.result.gum.budget_nu`: Welch–Satterthwaite over a_BASE's budget lines,
     also where a_BASE is stated by its bound condition); items read them, none writes them."""
+    if "sf_temperature_coefficient" in done:
+        ctx = replace(ctx, sf_tc_item=done["sf_temperature_coefficient"])
     sf = done.get("scale_factor")
     if sf is None or not sf.measured:
         return ctx
@@ -3074,8 +3098,11 @@ ITEMS = tuple((key, title, clause, _FUNCTION_OF.get(key) or globals()[key])
               for key, title, clause in ITEM_ROWS)
 
 #: What each item needs computed before it (gonio.result.items.item_order orders them): every
-#: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).
-NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}
+#: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1), which needs
+#: 5.1.3.4's coefficient (:func:`chamber_coefficient`; 5.1.3.4 itself needs neither).
+NEEDS = {row[0]: ("scale_factor",) for row in ITEMS
+         if row[0] not in ("scale_factor", "sf_temperature_coefficient")}
+NEEDS["scale_factor"] = ("sf_temperature_coefficient",)
 
 
 #: Items that are non-negative by their definition (a maximum of absolute values, a standard
