@@ -6,7 +6,9 @@ value at all (the mark is in the times' nanosecond, for every specification) and
 at most one unit of its ninth decimal; and
 readings not written by the bench (the repository's hand-made files, random real-looking
 readings, the bench's own readings perturbed by noise) are flagged at most at the test's
-stated level, checked against scipy.stats.binomtest.
+stated level, checked against scipy.stats.binomtest. mark_text, column by column, writes the
+bytes of its former row-by-row form (kept here as the reference) on every specification's
+readings and on made-up texts with every odd cell.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from scipy.stats import binomtest
 from gonio.formats.provenance import readings_provenance
 from gonio.formats.watermark import (ALPHA, MIN_CELLS, TIME_COLUMN, detect, detect_text,
                                      mark_text, marked_columns)
+from gonio.formats import watermark as wm
 from tests.own_readings import own_text, resaved, unmarked
 
 HERE = Path(__file__).resolve().parent
@@ -300,3 +303,132 @@ def test_stream_times_follow_the_cell_definition():
     for i in range(n):
         bit = cell_bit(TIME_COLUMN, f"{canonical(int(counts[i]))}\x1f{canonical(float(table[i]))}")[0]
         assert round(got[i] * 10**TIME_DECIMALS) % 2 == bit, i
+
+
+def _reference_mark_text(text: str) -> str:
+    """mark_text as it was before it went column by column (gonio's text of 2026-12-02), row
+    by row, on the module's unchanged definition of the mark (cell_bit, canonical, _value,
+    _q, _fixed, column_decimals): the reference of the byte-identity tests below."""
+    lines = text.splitlines(keepends=True)
+    rows = wm._iter_rows(lines)
+    first = next(rows, None)
+    if first is None:
+        return text
+    header = [c.strip().lstrip("\ufeff") for c in first[1]]
+    cols = wm.marked_columns(header)
+    if not cols:
+        return text
+    optical = any(n in wm.OPTICAL_COLUMNS for n in header)
+    rows = [(i, c) for i, c in rows if len(c) == len(header) and '"' not in lines[i]]
+    values = {j: [wm._value(c[j]) for _, c in rows] for j in cols}
+    decimals = {j: wm.column_decimals(name, values[j]) for j, name in cols.items()}
+    marked = set(cols)
+    for r, (i, cells) in enumerate(rows):
+        ctx = "\x1f".join(wm.canonical(c) for j, c in enumerate(cells) if j not in marked)
+        for j, name in cols.items():
+            d = decimals[j]
+            v = values[j][r]
+            if d <= 0 or v is None:
+                continue
+            q = wm._q(v, d)
+            bit, up = wm.cell_bit(name, ctx)
+            if q % 2 != bit:
+                q += 1 if up or q == 0 or not optical else -1
+            if name != wm.TIME_COLUMN or Decimal(q).scaleb(-d) != Decimal(cells[j].strip()):
+                cells[j] = wm._fixed(q, d)
+        end = lines[i][len(lines[i].rstrip("\r\n")):]
+        lines[i] = ",".join(cells) + end
+    return "".join(lines)
+
+
+@pytest.mark.parametrize("spec", [r[0] for r in RUNS])
+def test_same_bytes_as_the_row_by_row_marking(spec, simulated):
+    """mark_text (column by column: times in integer arrays, contexts made at once) writes
+    the bytes of its former row-by-row form (:func:`_reference_mark_text`) on every readings
+    file of the specification as written, unmarked (times at the millisecond), re-saved and
+    with CRLF line ends (a file's first 4000 lines: the reference is slow)."""
+    files = sorted(simulated[(spec, "a")].glob("*.csv"))
+    assert files
+    for f in files:
+        text = "".join(f.read_text(encoding="utf-8").splitlines(keepends=True)[:4000])
+        plain = unmarked(text)
+        for variant in (text, plain, resaved(plain), plain.replace("\n", "\r\n")):
+            assert mark_text(variant) == _reference_mark_text(variant)
+        assert mark_text(plain) != plain
+
+
+def _odd_time(rng) -> str:
+    """A time cell of every kind the row form took."""
+    kind = int(rng.integers(0, 16))
+    x = float(rng.uniform(0, 2000))
+    return [f"{x:.3f}", f"{x:.9f}", f"{x:.12f}", f"{x!r}", f"{x:.6e}", f"{-x:.4f}", "-0", "0",
+            "0.0", f" {x:.2f} ", "", "nan", "inf", "1e400", f"+{x:.1f}", "١٢.٥",
+            f"{int(x)}", ".5", "5.", "-0.000000001", "1e-12", f"{x * 1e7:.9f}",
+            "123456789.123456789", "1234567890.5", "12345678901234567890", "x1", "--1",
+            "1.2.3", "+", "\x00"][kind + int(rng.integers(0, 15))]
+
+
+def test_same_bytes_on_odd_cells():
+    """Made-up texts with every odd cell, line and file the row form met: the same bytes."""
+    rng = np.random.default_rng(41)
+    for trial in range(60):
+        optical = trial % 3 == 0
+        head = ("test,series,round,rate_dps,orientation,time_s,table_deg,gyro_counts,gyro_deg"
+                if optical else "test,run,step,role,time_s,rate_dps,output")
+        width = head.count(",") + 1
+        out = ["# bench: virtual\n", "\ufeff" + head + "\n" if trial % 5 == 0 else head + "\n"]
+        for i in range(int(rng.integers(1, 80))):
+            cells = [str(int(rng.integers(0, 3))) for _ in range(width)]
+            cells[0] = ["bias", "", " 60.0", "6E1", "-0.0", "+x"][int(rng.integers(0, 6))]
+            cells[head.split(",").index("time_s")] = _odd_time(rng)
+            cells[-1] = f"{rng.normal(2500, 1):.{int(rng.integers(0, 4))}f}"
+            line = ",".join(cells)
+            roll = rng.random()
+            if roll < 0.04:
+                line = line + ",extra"
+            elif roll < 0.08:
+                line = '"quoted",' + line.split(",", 1)[1]
+            elif roll < 0.1:
+                line = "# a comment, here"
+            elif roll < 0.12:
+                line = "   "
+            out.append(line + ["\n", "\r\n", "\r"][int(rng.integers(0, 3))])
+        text = "".join(out)
+        assert mark_text(text) == _reference_mark_text(text), trial
+        assert mark_text(text.rstrip("\r\n")) == _reference_mark_text(text.rstrip("\r\n"))
+    for text in ("", "# only a comment\n", "a,b\n1,2\n", "time_s\n", "time_s\n1.5\n",
+                 "time_s\n1.5\n2\n", "time_s,x\n", '"time_s",x\n1,2\n3,4\n'):
+        assert mark_text(text) == _reference_mark_text(text), repr(text)
+
+
+def test_same_bytes_in_a_file_without_times():
+    """A rate or triad file without times (its measured columns marked at their decimals),
+    with blank, short and exponent cells: the same bytes."""
+    rng = np.random.default_rng(43)
+    rows = [f"{i},{rng.normal(10, 1):.{int(rng.integers(0, 14))}f},{rng.normal(2, 1):.3e},"
+            f"{['', '0.0', 'x', '2'][i % 4]}" for i in range(300)]
+    text = "step,out_x,sd_x,output\n" + "\n".join(rows) + "\n"
+    assert mark_text(text) == _reference_mark_text(text)
+
+
+def test_short_times_are_their_exact_values():
+    """The column path's times in ns are the texts' exact values (Decimal), which are their
+    '%.15g' values (the row form's); any other text is left to the cell path."""
+    rng = np.random.default_rng(44)
+    texts = []
+    for _ in range(20000):
+        whole = str(int(rng.integers(0, 10 ** int(rng.integers(1, 10)))))
+        frac = "".join(rng.choice(list("0123456789"), int(rng.integers(0, 10))))
+        t = f"{['', '-', '+'][int(rng.integers(0, 3))]}{whole}{'.' if frac or rng.random() < .2 else ''}{frac}"
+        texts.append(t)
+    texts += ["", "-", ".", "1.2.3", " 1", "1e3", "١", "1234567890", "0.0000000001",
+              "123456789.1234567", "12345678.1234567", "-0", "\x00", "5\x00"]
+    short, q = wm._short_times_q(texts)
+    for t, s, v in zip(texts, short.tolist(), q.tolist()):
+        if not s:
+            continue
+        exact = Decimal(t).scaleb(9)
+        assert exact == int(exact) == v, t
+        assert Decimal("%.15g" % float(t)).scaleb(9) == exact, t
+    assert short[:20000].mean() > 0.5
+    assert [t for t, s in zip(texts[20000:], short[20000:]) if s] == ["12345678.1234567", "-0"]

@@ -71,6 +71,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import math
 import re
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -227,16 +228,174 @@ def _fixed(q: int, d: int) -> str:
     return f"{Decimal(q).scaleb(-d):.{d}f}"
 
 
+#: A plain decimal text: its sign, whole digits and decimals (ASCII digits, no exponent).
+_PLAIN = re.compile(r"([+-]?)([0-9]*)\.?([0-9]*)")
+_TIME_SCALE = 10 ** TIME_DECIMALS
+#: 10**k for the digits of a time in ns held in an int64 (below 10**18).
+_POW10 = np.array([10 ** k for k in range(19)], dtype=np.int64)
+#: The longest time text the column path reads (sign, 15 digits, point).
+_SHORT = 17
+
+
+def _plain_q(s: str) -> int | None:
+    """``s`` (a plain decimal text with at most :data:`TIME_DECIMALS` decimals and fewer
+    than 16 whole digits) as the integer of its value in ns, exactly; None for any other
+    text (an exponent, more decimals, other digits), which the caller takes through
+    :class:`~decimal.Decimal`."""
+    m = _PLAIN.fullmatch(s)
+    if m is None:
+        return None
+    sign, whole, frac = m.groups()
+    if len(frac) > TIME_DECIMALS or len(whole) > 15 or not (whole or frac):
+        return None
+    q = int(whole or "0") * _TIME_SCALE + int(frac.ljust(TIME_DECIMALS, "0"))
+    return -q if sign == "-" else q
+
+
+def _time_q(t: str) -> int | None:
+    """``_q(_value(t), 9)`` of a stripped time text (None: not a finite number): plain
+    ``'%.15g'`` texts by integer arithmetic, any other through :class:`~decimal.Decimal`."""
+    if not _NUMBER.match(t):
+        return None
+    f = float(t)
+    if not math.isfinite(f):
+        return None
+    s = "%.15g" % f
+    q = _plain_q(s)
+    return _q(Decimal(s), TIME_DECIMALS) if q is None else q
+
+
+def _same_time(q: int, t: str) -> bool:
+    """Whether ``q`` ns is the value of the time text ``t``:
+    ``Decimal(q).scaleb(-9) == Decimal(t)``, by integers where ``t`` is plain."""
+    qt = _plain_q(t)
+    if qt is None:
+        return Decimal(q).scaleb(-TIME_DECIMALS) == Decimal(t)
+    return q == qt
+
+
+def _fixed_time(q: int) -> str:
+    """:func:`_fixed` of ``q`` at :data:`TIME_DECIMALS` (the same text)."""
+    if abs(q) >= 10 ** 27:              # beyond the decimal context's 28 digits
+        return _fixed(q, TIME_DECIMALS)
+    a = abs(q)
+    return f"{'-' if q < 0 else ''}{a // _TIME_SCALE}.{a % _TIME_SCALE:0{TIME_DECIMALS}d}"
+
+
+def _short_times_q(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """``(short, q)`` of a time column at once: ``short`` where a text is a plain decimal
+    (an optional sign, ASCII digits, at most one point; no space) of at most 9 whole digits,
+    9 decimals and 15 digits in all, ``q`` its exact value in ns there. Such a text's value
+    is its ``'%.15g'`` value (a decimal of at most 15 significant digits survives the
+    double and ``'%.15g'``: C's ``DBL_DIG``), so ``q`` is ``_q(_value(t), 9)``; the others
+    go cell by cell (:func:`_time_q`)."""
+    n = len(texts)
+    length = np.fromiter(map(len, texts), dtype=np.int64, count=n)
+    if n and int(length.max()) > _SHORT:
+        texts = [t if len(t) <= _SHORT else "" for t in texts]
+        length = np.where(length > _SHORT, 0, length)
+    c = np.array(texts, dtype=str)
+    c = c.view(np.uint32).reshape(n, -1).astype(np.int64) if c.itemsize else np.zeros((n, 1), np.int64)
+    pos = np.arange(c.shape[1])[None, :]
+    signed = (c[:, 0] == 43) | (c[:, 0] == 45)          # '+', '-'
+    body = (pos < length[:, None]) & (pos >= signed[:, None])
+    digit = body & (c >= 48) & (c <= 57)
+    dot = body & (c == 46)
+    n_dot, n_digit = dot.sum(1), digit.sum(1)
+    point = np.where(n_dot == 1, dot.argmax(1), length)[:, None]
+    n_whole = (digit & (pos < point)).sum(1)
+    short = ((digit | dot) == body).all(1) & (n_dot <= 1) & (n_digit >= 1) & (n_digit <= 15) \
+        & (n_whole <= TIME_DECIMALS) & (n_digit - n_whole <= TIME_DECIMALS)
+    use = digit & short[:, None]
+    power = np.where(use, np.where(pos < point, point - 1 - pos, point - pos) + TIME_DECIMALS, 0)
+    q = np.where(use, (c - 48) * _POW10[power], 0).sum(1)
+    return short, np.where(c[:, 0] == 45, -q, q)
+
+
+def _data_columns(lines: list[str], start: int, width: int) -> tuple[list[int], list[str]]:
+    """The line indices of the data rows after the header (line ``start``) that
+    :func:`mark_text` marks ('#' and blank lines skipped as :func:`_iter_rows` does; lines
+    with a quote or another number of cells than ``width`` left out) and their cells, row
+    after row in one list (cell ``j`` of row ``r`` at ``r·width + j``)."""
+    idx = [i for i in range(start + 1, len(lines))
+           if (s := lines[i].rstrip("\r\n")).count(",") == width - 1 and '"' not in s
+           and s.strip() and not s.lstrip("\ufeff").startswith("#")]
+    return idx, ",".join([lines[i].rstrip("\r\n") for i in idx]).split(",")
+
+
+def _contexts(columns: list[list[str]], marked) -> list[str]:
+    """:func:`_context` of every row at once, from the file's columns: each distinct text
+    made :func:`canonical` once."""
+    others = [c for j, c in enumerate(columns) if j not in marked]
+    if not others:
+        return [""] * len(columns[0])
+    memo = {t: canonical(t) for t in set().union(*others)}
+    get = memo.__getitem__
+    return list(map("\x1f".join, zip(*[list(map(get, col)) for col in others])))
+
+
+def _bits(name: str, contexts: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`cell_bit` of ``name`` and each context, as two arrays (the parity bits and
+    the direction bits): one keyed hasher, copied per row."""
+    keyed = hashlib.blake2b(key=KEY, digest_size=2)
+    keyed.update(f"{name}\x1f".encode())
+
+    def digest(ctx: str) -> bytes:
+        x = keyed.copy()
+        x.update(ctx.encode())
+        return x.digest()
+    h = np.frombuffer(b"".join(map(digest, contexts)), dtype=np.uint8).reshape(-1, 2) & 1
+    return h[:, 0].astype(np.int64), h[:, 1].astype(bool)
+
+
+def _mark_time(name: str, texts: list[str], bit, up, optical: bool) -> dict[int, str]:
+    """{row: new text} of a ``time_s`` column's cells whose value the mark moves (the
+    others keep their text)."""
+    short, q = _short_times_q(texts)
+    step = np.where(up | (q == 0) | (not optical), 1, -1)
+    move = short & (q % 2 != bit)
+    out = {r: _fixed_time(v) for r, v in zip(np.flatnonzero(move).tolist(),
+                                             (q + step)[move].tolist())}
+    for r in np.flatnonzero(~short).tolist():
+        t = texts[r].strip()
+        v = _time_q(t)
+        if v is None:
+            continue
+        if v % 2 != bit[r]:
+            v += 1 if up[r] or v == 0 or not optical else -1
+        if not _same_time(v, t):
+            out[r] = _fixed_time(v)
+    return out
+
+
+def _mark_column(name: str, texts: list[str], bit, up, optical: bool) -> dict[int, str]:
+    """{row: new text} of a measured column: every finite value written with the column's
+    decimals (none where they are 0)."""
+    values = [_value(c) for c in texts]
+    d = column_decimals(name, values)
+    if d <= 0:
+        return {}
+    out = {}
+    for r, (v, b, u) in enumerate(zip(values, bit.tolist(), up.tolist())):
+        if v is None:
+            continue
+        q = _q(v, d)
+        if q % 2 != b:
+            q += 1 if u or q == 0 or not optical else -1
+        out[r] = _fixed(q, d)
+    return out
+
+
 def mark_text(text: str) -> str:
     """``text`` (a readings file's CSV text, the virtual bench's) with every marked cell
     carrying the watermark (module docstring). Deterministic: the same text gives the same
     bytes; marking marked text changes nothing. Lines with quoted cells are left as they
     are. A measured value is written with its column's decimals; a time whose value does
     not change keeps its text (``12.05`` stays ``12.05``), one that does is written with
-    nine decimals."""
+    nine decimals. The work goes column by column over the whole file: the rows' contexts
+    at once, one keyed hash per marked cell, the times' values in integer arrays."""
     lines = text.splitlines(keepends=True)
-    rows = _iter_rows(lines)
-    first = next(rows, None)
+    first = next(_iter_rows(lines), None)
     if first is None:
         return text
     header = [c.strip().lstrip("\ufeff") for c in first[1]]
@@ -244,27 +403,21 @@ def mark_text(text: str) -> str:
     if not cols:
         return text
     optical = any(n in OPTICAL_COLUMNS for n in header)
-    rows = [(i, c) for i, c in rows if len(c) == len(header) and '"' not in lines[i]]
-    values = {j: [_value(c[j]) for _, c in rows] for j in cols}
-    decimals = {j: column_decimals(name, values[j]) for j, name in cols.items()}
-    marked = set(cols)
-    memo: dict[str, str] = {}
-    for r, (i, cells) in enumerate(rows):
-        ctx = _context(cells, marked, memo)
-        for j, name in cols.items():
-            d = decimals[j]
-            v = values[j][r]            # _value(cells[j]): no cell is rewritten before its own
-            if d <= 0 or v is None:
-                continue
-            q = _q(v, d)
-            bit, up = cell_bit(name, ctx)
-            if q % 2 != bit:        # a zero (a first time) stays >= 0; a rate or triad
-                # time only later (a record's first time stays inside its segment)
-                q += 1 if up or q == 0 or not optical else -1
-            if name != TIME_COLUMN or Decimal(q).scaleb(-d) != Decimal(cells[j].strip()):
-                cells[j] = _fixed(q, d)
-        end = lines[i][len(lines[i].rstrip("\r\n")):]
-        lines[i] = ",".join(cells) + end
+    w = len(header)
+    idx, flat = _data_columns(lines, first[0], w)
+    if not idx:
+        return text
+    columns = [flat[j::w] for j in range(w)]
+    contexts = _contexts(columns, cols)
+    changed: set[int] = set()
+    for j, name in cols.items():
+        mark = _mark_time if name == TIME_COLUMN else _mark_column
+        for r, new in mark(name, columns[j], *_bits(name, contexts), optical).items():
+            flat[r * w + j] = new
+            changed.add(r)
+    for r in sorted(changed):
+        i = idx[r]
+        lines[i] = ",".join(flat[r * w:(r + 1) * w]) + lines[i][len(lines[i].rstrip("\r\n")):]
     return "".join(lines)
 
 
