@@ -385,8 +385,9 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
 def test_items_csv_nu_is_the_stated_nu(issued):
     """items.csv's ν is the ν the statement prints (the certificate's ν_eff column): empty
     where results.json's nu_eff is null and the certificate prints "—" (JJF warm-up time was
-    "inf"), "inf" only where the stated ν is ∞ (ν_eff above the normal threshold), else the
-    integer part of results.json's nu_eff (GUM G.6.4), recomputed here."""
+    "inf"), "inf" only where the stated ν is ∞ (ν_eff above the normal threshold; never for
+    a χ² interval, whose ν is the one its bound used), else the integer part of
+    results.json's nu_eff (GUM G.6.4), recomputed here."""
     import math
 
     from gonio.result.statement import NU_INFINITE
@@ -397,7 +398,10 @@ def test_items_csv_nu_is_the_stated_nu(issued):
         if nu is None:
             assert got == "", (key, got)
         elif got:
-            want = math.inf if nu > NU_INFINITE else float(max(1, math.floor(nu)))
+            # a χ² interval's ν: the one its bound is computed with, never ∞
+            chi2 = it["uncertainty"].get("k_source") == "chi-square"
+            want = (math.inf if nu > NU_INFINITE and not chi2
+                    else float(max(1, math.floor(nu))))
             assert float(got) == want, (key, got, nu)
 
 
