@@ -96,3 +96,38 @@ def test_item_gives_the_standard_reading_beside():
     assert std_val == pytest.approx(direct / 60.0, rel=1e-12)
     assert line == pytest.approx(math.exp(float(np.mean(
         np.log(a.adev[mask] * np.sqrt(a.tau_s[mask]))))) / 60.0, rel=1e-12)
+
+
+def test_the_item_states_the_standard_reading_the_rule_gives_on_the_data():
+    """The item's ``standard_reading`` (given beside, not certified) is the −½ line over the
+    range the data's own slope gives, read at 1 h, uncorrected — recomputed here by hand from
+    the record's Allan deviation (local slope by finite differences in log–log, the range from
+    the shortest τ to the first slope outside −½ ± 0.05, the geometric mean of σ√τ, /60),
+    so that a scaled or renamed reading fails."""
+    from gonio.analysis.noise import fit_markov_model, fit_noise_model
+    from gonio.bench.rate_gyro import NoiseState, load_rate_bench
+
+    g = load_rate_bench("mems-adxrs610").gyro
+    x = NoiseState(g, np.random.default_rng(11)).samples(20_000, 0.1, g.reference_temperature_c)
+    a = allan_deviation(x * 3600.0, 0.1, "rate", "decade:10", unit="deg/h")
+    key = ("allan", 6.0, 2500.0)
+    cache = {key: (a, x * 3600.0, 0.1), "static_extent": (x.size, True),
+             ("noise_fit", 6.0, 2500.0): fit_noise_model(a),
+             ("noise_fit_shaped", 6.0, 2500.0): fit_markov_model(a)}
+    ctx = SimpleNamespace(a_base=6.0, null_output=2500.0, cache=cache, has=lambda t: True)
+    item = I.arw(ctx)
+    tau, sig = np.asarray(a.tau_s, float), np.asarray(a.adev, float)
+    lt, ls = np.log(tau), np.log(sig)
+    slope = np.empty(tau.size)
+    slope[1:-1] = (ls[2:] - ls[:-2]) / (lt[2:] - lt[:-2])
+    slope[0] = (ls[1] - ls[0]) / (lt[1] - lt[0])
+    slope[-1] = (ls[-1] - ls[-2]) / (lt[-1] - lt[-2])
+    n = int(np.argmax(np.abs(slope + 0.5) > 0.05)) if np.any(np.abs(slope + 0.5) > 0.05) \
+        else tau.size
+    assert n >= 2
+    expect = math.exp(float(np.mean(ls[:n] + 0.5 * lt[:n]))) / 60.0
+    got = item.details["standard_reading"]
+    assert got["clause"] == "5.4.5.2"
+    assert got["value"] == pytest.approx(expect, rel=1e-9)
+    assert np.array_equal(np.asarray(item.details["standard_line_tau_s"]), tau[:n])
+    assert "not certified" in got["text_en"] and "不作校准结果" in got["text_zh"]

@@ -37,7 +37,10 @@ READINGS_TAKEN = (
     "is used: axis up Ω_E sin λ, horizontal Ω_E cos λ cos φ.",
     "5.3.3.4: bias repeatability as the half range (max − min)/2 of the records.",
     "5.3.3.6: least-squares slope through every visit of base → max → base → min → base.",
-    "5.4.5.2: slope −½ line fitted where the local slope is −½ ± 0.1, read at 1 h.",
+    "5.4.5.2: slope −½ line fitted where the local slope is −½ ± 0.05 (the reading taken: "
+    "the text gives no tolerance), read at 1 h; certified: that rule applied to the fitted "
+    "noise model's curve and the line divided by the model's lift over it (the rule on the "
+    "data, uncorrected, given beside).",
     "5.4.5.3: floor over τ with ≥ 10 clusters, divided by √(2 ln 2/π) (the standard's reading, "
     "given beside the results, not certified); the value is that reading less the rule's bias under the record's fitted "
     "noise model (other noise terms at the floor τ, minimum over τ), stated by the 95 % "
