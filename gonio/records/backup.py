@@ -501,6 +501,7 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
     who = actor.username if actor is not None else "(command line)"
     if not replace:
         with store.writing() as s:
+            _still_no_user(s, path)
             _write(s, rows, path, event, who, own=_set_aside(s))
             s.commit()
     elif store.engine.dialect.name == "sqlite":
@@ -510,6 +511,22 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
     counts = {k: len(v) for k, v in rows.items() if v}
     counts["files"] = len(names)
     return counts
+
+
+def _still_no_user(s, path: Path) -> None:
+    """The no-user check again, in the writing transaction that sets the store's own events
+    aside (:func:`_set_aside`), so a user added since the first check (another command or a
+    web process on the same store) is seen: SQLite's transaction holds the write lock from
+    its first statement (BEGIN IMMEDIATE), PostgreSQL's locks both tables first. GonioError
+    (nothing restored) if the store holds a user now."""
+    if s.get_bind().dialect.name == "postgresql":
+        s.execute(text(f"SET LOCAL lock_timeout = '{int(LOCK_TIMEOUT_S)}s'"))
+        s.execute(text("LOCK TABLE users, audit_events IN EXCLUSIVE MODE"))
+    if s.scalar(select(func.count()).select_from(User)):
+        s.rollback()
+        raise GonioError("the database holds records already (a user was added while the "
+                         "archive was read); restore into an empty one (gonio db init on "
+                         "a new data folder or database): nothing restored", file=path)
 
 
 def _fill_stated(store, rows: dict) -> None:
@@ -581,10 +598,13 @@ def _write(s, rows: dict, path: Path, event: dict, who: str, own: list | None = 
 
     try:
         for table in _tables():
-            todo, replaced = (_settings_kept(s, rows[table.name]) if table.name == "settings"
-                              else (rows[table.name], {}))
+            todo, replaced, removed = (_settings_kept(s, rows[table.name])
+                                       if table.name == "settings"
+                                       else (rows[table.name], {}, {}))
             if own is not None and replaced:
                 event["settings_replaced"] = replaced
+            if removed:
+                event["settings_removed"] = removed
             if todo:
                 s.execute(table.insert(), todo)
         if own:
@@ -613,12 +633,16 @@ def _write(s, rows: dict, path: Path, event: dict, who: str, own: list | None = 
                          "restored", file=path) from None
 
 
-def _settings_kept(s, settings: list[dict]) -> tuple[list[dict], dict]:
-    """The archive's ``settings`` rows to insert into the session's database, and the
+def _settings_kept(s, settings: list[dict]) -> tuple[list[dict], dict, dict]:
+    """The archive's ``settings`` rows to insert into the session's database, the
     database's values they replace (``{key: [its value, the archive's]}``, where they
-    differ). The archive's setting of a key replaces the database's (that row deleted
-    first: ``gonio db init``'s laboratory details, the ``timezone`` its migration wrote); a
-    key the archive lacks keeps the database's row. An archive without a zone or with an
+    differ) and the database's rows removed without a replacement (``{key: its value}``).
+    The archive's setting of a key replaces the database's (that row deleted first:
+    ``gonio db init``'s laboratory details, the ``timezone`` its migration wrote); a key the
+    archive lacks keeps the database's row, but for the laboratory's identity (every
+    ``lab_*`` key), which travels as one group: where the archive holds any of them, the
+    database's ``lab_*`` keys the archive lacks are removed, so that no certificate states
+    one laboratory's name beside another's accreditation or contact. An archive without a zone or with an
     empty one (written before stores held one) keeps the database's, else gets this
     machine's (:func:`gonio.records.models.machine_zone`), as the migration gives an older
     store."""
@@ -633,9 +657,13 @@ def _settings_kept(s, settings: list[dict]) -> tuple[list[dict], dict]:
     keys = [r.get("key") for r in todo]
     replaced = {r["key"]: [live[r["key"]], r.get("value")] for r in todo
                 if r.get("key") in live and live[r["key"]] != r.get("value")}
-    if keys:
-        s.execute(delete(Setting).where(Setting.key.in_(keys)))
-    return todo, replaced
+    removed = {}
+    if any(str(k).startswith("lab_") for k in keys):
+        removed = {k: v for k, v in sorted(live.items())
+                   if k.startswith("lab_") and k not in keys}
+    if keys or removed:
+        s.execute(delete(Setting).where(Setting.key.in_([*keys, *removed])))
+    return todo, replaced, removed
 
 
 def _set_aside(s) -> list[dict]:

@@ -427,8 +427,8 @@ def test_a_restore_into_an_initialised_store_keeps_both_trails(store, tmp_path, 
     key). Now the archive's trail comes back row for row under its own ids (compared with
     the archive's records.json, read here independently), the store's own events follow it
     unchanged but for their ids, the restore's event is the newest and names both, the
-    archive's settings replace the store's (the zone too), a setting only the store has
-    stays, the trail still refuses DELETE and UPDATE, and the next event follows the
+    archive's settings replace the store's (the zone too), the store's laboratory details
+    the archive lacks are removed with it (named in the event), the trail still refuses DELETE and UPDATE, and the next event follows the
     restore's. On SQLite and PostgreSQL, from the command line."""
     from sqlalchemy.exc import DBAPIError
 
@@ -473,10 +473,17 @@ def test_a_restore_into_an_initialised_store_keeps_both_trails(store, tmp_path, 
         assert said["settings_replaced"] == {"timezone": ["Europe/Berlin", "Asia/Shanghai"],
                                              "lab_name": ["Lab B", "Lab A"],
                                              "lab_address": ["2 B Road", "1 A Street"]}
+        # the laboratory's identity travels as one group: Lab B's accreditation and contact
+        # are not left beside Lab A's name, and the restore's event names them
+        assert said["settings_removed"] == {"lab_accreditation": "CNAS L0000",
+                                            "lab_contact": "b@example.org"}
         assert records_zone(target) == "Asia/Shanghai"
         got = services.settings(target)
-        assert (got["lab_name"], got["lab_address"], got["lab_accreditation"],
-                got["lab_contact"]) == ("Lab A", "1 A Street", "CNAS L0000", "b@example.org")
+        assert (got["lab_name"], got["lab_address"]) == ("Lab A", "1 A Street")
+        assert not got.get("lab_accreditation") and not got.get("lab_contact")
+        with target.session() as s:
+            keys = set(s.scalars(text("SELECT key FROM settings")))
+        assert {k for k in keys if k.startswith("lab_")} == {"lab_name", "lab_address"}
         for sql in ("DELETE FROM audit_events WHERE id = 1",
                     "UPDATE audit_events SET action = 'x' WHERE id = 1"):
             with pytest.raises(DBAPIError, match="append-only"):
@@ -486,6 +493,44 @@ def test_a_restore_into_an_initialised_store_keeps_both_trails(store, tmp_path, 
         assert _trail(target)[-1]["id"] == last["id"] + 1
         target.engine.dispose()
         cli(["db", "verify", *where], capsys, 0)
+    finally:
+        target.close()
+
+
+def test_a_restore_refuses_a_user_added_after_its_first_check(sqlite_store, tmp_path,
+                                                                 capsys, monkeypatch):
+    """A user added to the target between the restore's first "no user" check and the
+    transaction that sets its own events aside (here: while the archive's rows are filled,
+    the step between them) is seen by the check repeated in that transaction: refused,
+    exit 2, the store's trail and user as they were."""
+    from gonio.records import backup as backup_mod
+
+    make_people(sqlite_store)
+    archive = tmp_path / "a.zip"
+    backup(sqlite_store, archive)
+    cli(["db", "init", "--data", tmp_path / "t", "--lab-name", "Lab B"], capsys, 0)
+    target = open_store(None, tmp_path / "t")
+    try:
+        before = _trail(target)
+        fill = backup_mod._fill_stated
+
+        def fill_and_add_user(store, rows):
+            fill(store, rows)
+            other = open_store(None, tmp_path / "t")
+            try:
+                services.create_user(other, None, "late", PASSWORD, "admin")
+            finally:
+                other.close()
+
+        monkeypatch.setattr(backup_mod, "_fill_stated", fill_and_add_user)
+        target.engine.dispose()
+        out = cli(["db", "restore", "--data", tmp_path / "t", archive], capsys, 2)
+        assert "user was added" in out.err and "nothing restored" in out.err
+        trail = _trail(target)
+        assert trail[:len(before)] == before
+        assert len(trail) == len(before) + 1                   # the late user's own event
+        with target.session() as s:
+            assert list(s.scalars(text("SELECT username FROM users"))) == ["late"]
     finally:
         target.close()
 
