@@ -519,6 +519,8 @@ def test_a_restore_refuses_a_user_added_after_its_first_check(sqlite_store, tmp_
             other = open_store(None, tmp_path / "t")
             try:
                 services.create_user(other, None, "late", PASSWORD, "admin")
+                with other.engine.begin() as c:                # an id no archive user has,
+                    c.execute(text("UPDATE users SET id = 1000"))   # so only the check sees it
             finally:
                 other.close()
 
