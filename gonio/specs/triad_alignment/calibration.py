@@ -714,6 +714,24 @@ def _rest_of(unc: Uncertainty, drop: str) -> tuple[float, float]:
     return u, (u ** 4 / den if den > 0 else math.inf)
 
 
+def _arw_one_sample(ch: str, m, clause: str, unit: str) -> dict[str, Item]:
+    """ARW(ϑ) of gyro ``ch`` not measured at the set points when its model has no ARW fit
+    because static soak dwells hold one sample (``n_samples`` = 1: no standard deviation, so
+    no white-noise density); empty otherwise (no static dwells: no ARW items, as before)."""
+    pts = m.points
+    one = (pts["arw_n"] > 0) & (pts["arw_n"] < 2)
+    if m.arw is not None or not one.any():
+        return {}
+    sp = sorted(set(np.round(pts["chamber_c"].to_numpy(float), 1).tolist()))
+    reason = (f"{int(one.sum())} static soak dwells hold one sample (n_samples = 1): one "
+              "sample gives no standard deviation; ARW(ϑ) needs at least 3 dwells of 2 or "
+              "more samples")
+    return {f"ARW_{ch}_t{i}": not_measured(f"ARW_{ch}_t{i}",
+                                           f"angle random walk ARW_{ch} at {t:g} °C",
+                                           clause, unit, reason)
+            for i, t in enumerate(sp, 1)}
+
+
 def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None,
                   rate_u_rel: float = 0.0, statement: str = "bound",
                   flicker: dict | None = None) -> dict[str, Item]:
@@ -736,6 +754,7 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
     names = {"K": "scale factor", "b": "bias", "ARW": "angle random walk"}
     clauses = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18", "ARW": "thesis eq. 6.20"}
     for ch, m in th.channels.items():
+        items.update(_arw_one_sample(ch, m, clauses["ARW"], units["ARW"]))
         fits = {"K": m.scale, "b": m.bias, "ARW": m.arw}
         for pt in m.certified_points(th.reference_c, th.reference_v):
             name, fit = pt["model"], fits[pt["model"]]

@@ -263,4 +263,11 @@ PHRASES_ZH = (
      "{2} 第 {3} 步之前缺少第 {1} 步：结果仅基于现有各行"),
     (r"the readings have no static record \(rows test = static\)",
      "读数中没有静态记录（test = static 的行）"),
+    (r"(\d+) static soak dwells of one sample \(lines ([\d, ]+)\): one sample gives no "
+     r"standard deviation, so no angle random walk from them",
+     "{1} 个单样本静态保温测量段（第 {2} 行）：单个样本无标准差，不能由其得出角度随机游走"),
+    (r"(\d+) static soak dwells hold one sample \(n_samples = 1\): one sample gives no "
+     r"standard deviation; ARW\(ϑ\) needs at least 3 dwells of 2 or more samples",
+     "{1} 个静态保温测量段仅含一个样本（n_samples = 1）：单个样本无标准差；ARW(ϑ) 至少需要 "
+     "3 个含 2 个及以上样本的测量段"),
 )

@@ -17,6 +17,9 @@ naming the line. The rules (docs/alignment.md, "Screening"):
   biases b_i are then the in-run bias over this record, without the bias-instability term
   (their U holds the fit alone, about 6× smaller on the bench), and the averaging time is not
   measured; said on the certificate, not left to a detail.
+- **one-sample dwell** (flagged) — static soak dwells of ``n_samples`` = 1: no standard
+  deviation, so no ARW from them (the ARW values rest on the other dwells, or are not
+  measured).
 - **one temperature** — a thermal programme whose soak rows span less than
   :data:`MIN_TEMPERATURE_SPAN_C` (chamber) cannot identify a temperature model; it was
   certified as a model before.
@@ -160,13 +163,34 @@ def _no_static_record(df: pd.DataFrame, file) -> list[Finding]:
                     rule="a static record beside the alignment dwells")]
 
 
+def _one_sample_dwells(df: pd.DataFrame, file) -> list[Finding]:
+    """``one-sample-dwell`` (flagged): static soak dwells (thermal, soak, rate 0) of one
+    sample: one sample gives no standard deviation, so no angle random walk from them (the
+    ARW values rest on the other dwells, or are not measured); named once, by their lines."""
+    if not {"phase", "rate_dps", "n_samples"} <= set(df.columns):
+        return []
+    rate = pd.to_numeric(df["rate_dps"], errors="coerce")
+    n = pd.to_numeric(df["n_samples"], errors="coerce")
+    hit = df[(df["test"].astype(str) == "thermal") & (df["phase"].astype(str) == "soak")
+             & (rate == 0) & (n < 2)]
+    if not len(hit):
+        return []
+    lines = [int(x) for x in hit["line"]]
+    return [Finding("one-sample-dwell",
+                    f"{len(lines)} static soak dwells of one sample (lines "
+                    f"{', '.join(map(str, lines))}): one sample gives no standard deviation, "
+                    "so no angle random walk from them", "flagged", file=file, line=lines[0],
+                    column="n_samples", test="thermal", clause="thesis eq. 6.20",
+                    rule="a static soak dwell's standard deviation needs n_samples ≥ 2")]
+
+
 def screen(readings, protocol=None) -> list[Finding]:
     """Every finding on a triad readings file (:class:`gonio.specs.triad_alignment.readings.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
             + _one_temperature(df, file) + _step_gaps(df, file)
-            + _no_static_record(df, file))
+            + _no_static_record(df, file) + _one_sample_dwells(df, file))
 
 
 def check(readings, protocol=None) -> list[Finding]:

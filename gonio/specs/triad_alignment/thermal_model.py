@@ -63,8 +63,9 @@ MAX_ORDER_T, MAX_ORDER_U, MAX_ORDER_ARW = 4, 2, 2
 # --------------------------------------------------------------------------- data
 def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.DataFrame:
     """One row per ± pair of soak dwells: channel, ϑ, U, K, b (°/s), ARW (°/√h) of the
-    static dwell that follows at the same supply (NaN if none; ``arw_n`` its samples, 0 if
-    none, ``arw_fs_hz`` their rate), time (s) — step 1 of the
+    static dwell that follows at the same supply (NaN if none, or if it holds one sample: no
+    standard deviation; ``arw_n`` its samples, 0 if none, ``arw_fs_hz`` their rate), time (s)
+    — step 1 of the
     module docstring ([Vagner2015] §5.2.3–5.2.4: K from the ± difference, b from the mean
     with the Earth rate removed; whole revolutions, §5.3).
 
@@ -101,9 +102,11 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
             arw, arw_n = math.nan, 0
             if k + 2 < len(soak):
                 s = soak[k + 2]
-                if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
-                    arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
-                    arw_n = int(s["n_samples"])
+                if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"]:
+                    arw_n = int(s["n_samples"])     # one sample: no standard deviation
+                    if arw_n >= 2 and np.isfinite(s[f"sd_{AXES[c]}"]):
+                        arw = (s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs)
+                               / deg_sqrt_s_from_deg_sqrt_h(1.0))
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
                         "chamber_c": 0.5 * (a["chamber_c"] + b["chamber_c"]),
                         "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
