@@ -387,9 +387,10 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
             if phrase:
                 assert phrase[n] in legend, (lang, key, phrase[n])
                 # the item's clause stands in the bracket after its kind's phrase (a clause
-                # may hold a letter: IEC "5.4.5.1 b)")
+                # may hold a letter: IEC "5.4.5.1 b)"; the triad's, in zh, words: "论文式 6.20")
                 part = legend[legend.index(phrase[n]):]
-                bracket = re.search(r"[（(]([0-9a-z., ()（）、，]+?)[)）](?:[;；.。]|$)", part)
+                bracket = re.search(r"[（(]([0-9a-z., ()（）、，\u4e00-\u9fff]+?)[)）](?:[;；.。]|$)",
+                                    part)
                 assert bracket and clause in bracket.group(1), (lang, key, part[:300])
 
 
@@ -475,6 +476,27 @@ def test_dcc_value_is_the_stated_value_with_its_sign(issued):
                 span = re.findall(r'data-src="items\.' + key + r'\.value" data-rule="[^"]+">'
                                   r'([^<]*)<', html)
                 assert not span or minus_sign(got) in span or got in span, (key, got, span)
+    # a non-negative item whose bias-corrected estimate fell below zero, written as the
+    # interval [0, upper bound] alone (no si:value: the certificate prints no estimate)
+    for lang in ("en", "zh"):
+        root = issued["out"][lang]["dcc"]
+        for key, it in res["items"].items():
+            if it.get("upper_bound") is None or not isinstance(it.get("value"), float) \
+                    or it["value"] >= 0:
+                continue
+            result = root.find(f".//dcc:result[@id='result-{key}']", NS)
+            assert result is not None, (lang, key)
+            assert result.find(".//si:real/si:value", NS) is None, (lang, key)
+            lists = [q for q in result.iter(f"{{{SI_NS}}}realListXMLList")
+                     if (q.findtext("si:labelXMLList", namespaces=NS) or "")
+                     == "intervalMin intervalMax"]
+            assert len(lists) == 1, (lang, key)
+            lo, hi = (Decimal(x) for x in lists[0].findtext("si:valueXMLList",
+                                                             namespaces=NS).split())
+            step = Decimal(1).scaleb(hi.as_tuple().exponent)
+            assert lo == 0 and abs(hi - Decimal(repr(it["upper_bound"]))) <= step / 2, \
+                (lang, key, lo, hi, it["upper_bound"])
+            negative += 1
     if issued["spec"] in ("ogam-draft", "triad-alignment"):
         assert negative, "no negative item in this demo: the sign is not tested"
 
