@@ -256,3 +256,30 @@ def test_zh_dcc_names_the_interval_quantity_whole(cal):
         assert f"（{it['clause']}）" in zh_name and zh_name != zh_interval, zh_name
         assert zh_interval.startswith(zh_name) and "界限条件区间" in zh_interval, zh_interval
         assert zh_interval.endswith("p = 95 %"), zh_interval
+
+
+def test_iec_noise_items_hold_at_the_static_record_s_temperature(tmp_path_factory):
+    """The noise items (5.4.5.2, 5.4.5.1 b), c)) carry no term for the gyro's temperature error
+    at T_BASE: one flagged finding says they hold at the static record's temperature — the
+    readings' own temperature_c of the static rows, read here from the CSV text — within the
+    chamber's bound, on the certificate (en, zh without English words) and in results.json."""
+    from gonio.report.i18n import finding_text, labels
+    from gonio.specs.iec62047_20.certificate import PHRASES_ZH
+    from tests.test_zh_certificates import WHITELIST, WORD
+
+    c = _run(tmp_path_factory, "iec62047-20")
+    found = [f for f in c["res"]["findings"] if f["code"] == "noise-temperature-not-bounded"]
+    assert len(found) == 1 and found[0]["action"] == "flagged", c["res"]["findings"]
+    msg = found[0]["message"]
+    header = next(l for l in c["text"].splitlines() if not l.startswith("#")).split(",")
+    col, tcol = header.index("test"), header.index("temperature_c")
+    temps = {float(l.split(",")[tcol]) for l in c["text"].splitlines()
+             if not l.startswith("#") and l.split(",")[col] == "static"}
+    assert len(temps) == 1
+    for part in ("5.4.5.2", "5.4.5.1 b)", "5.4.5.1 c)", f"({temps.pop():g} °C",
+                 f"± {_chamber_bound_c(c['text']):g} °C", "not at T_BASE"):
+        assert part in msg, (part, msg)
+    assert "hold at the gyro's temperature during the static record" in _plain(c["html"])
+    zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
+    assert "噪声项" in zh and "而非 T_BASE" in zh
+    assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"temperature_c"}], zh

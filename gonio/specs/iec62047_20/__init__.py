@@ -117,6 +117,10 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     # a_BASE without 5.1.3.4's T_c,SF: its chamber-deviation term is not bounded, said so
     unbounded = _items.chamber_effect_finding(items, _items.gyro_temperature_bound_c(ctx))
     findings = list(findings) + ([unbounded] if unbounded is not None else [])
+    # the noise items hold at the static record's temperature: said so
+    noise_t = _items.noise_temperature_finding(
+        items, _items.static_record_temperature_c(ctx.df), _items.gyro_temperature_bound_c(ctx))
+    findings = findings + ([noise_t] if noise_t is not None else [])
     return Result(KEY, TITLE_EN, items, dict(md), source_info(rd),
                   list(READINGS_TAKEN),
                   extra={"supply_correction_eq18": {

@@ -166,6 +166,15 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "未计入该影响的分量（陀螺在 T_BASE 处的温度误差 ± {3} °C：温箱偏差及其在容积内的位置；"
      "各点之间的温箱温度波动），除以 a_BASE 的各项经其不确定度亦不含该分量——"
      "请测量 5.1.3.4 或给出该系数的界限"),
+    # the noise-temperature finding (gonio.specs.iec62047_20.items.noise_temperature_finding)
+    (r"the noise items (.+?) hold at the gyro's temperature during the static record "
+     r"\((.+?), the readings' temperature_c, with the gyro within ± (\S+) °C of it: the "
+     r"chamber's deviation and its place in the volume\), not at T_BASE: their intervals "
+     r"carry no term for the noise's temperature dependence \(no coefficient for it in the "
+     r"readings\)",
+     "噪声项 {1} 仅对静态记录期间陀螺的温度成立（{2}，读数中的 temperature_c，陀螺在其 ± {3} °C "
+     "以内：温箱偏差及其在容积内的位置），而非 T_BASE：其区间未计入噪声随温度变化的分量"
+     "（读数中无该系数）"),
     (r"half range of (\d+) records; interval from the distribution of the range of normal "
      r"values \(Tippett\)", "{1} 次记录的半极差；区间按正态值极差的分布求得"),
     (r"alignment of the input axis to the plane perpendicular to the rotation axis \(table axis "

@@ -309,6 +309,55 @@ def chamber_effect_finding(items: dict, chamber_bound_c: float):
                    rule="the scale-factor items' chamber term bounded by 5.1.3.4's T_c,SF")
 
 
+#: The code of :func:`noise_temperature_finding`.
+NOISE_TEMPERATURE_CODE = "noise-temperature-not-bounded"
+
+#: The noise items stated at the static record's temperature: no budget line for the
+#: gyro's temperature error at T_BASE (the noise's temperature coefficient is not among
+#: the readings).
+NOISE_ITEMS = ("arw", "inband_noise", "broadband_noise")
+
+
+def static_record_temperature_c(df: pd.DataFrame) -> float | None:
+    """The static record's temperature (°C) as the readings state it (its rows'
+    ``temperature_c``, their median); None where the readings carry no such column."""
+    from gonio.analysis.noise.stream import rows_where
+    if "temperature_c" not in df.columns:
+        return None
+    first, count, idx = rows_where(df, lambda d: (d["test"] == "static") & (d["run"] == 0)
+                                   & (d["step"] == 0))
+    if count == 0:
+        return None
+    col = df["temperature_c"].to_numpy()
+    t = col[first:first + count] if idx is None else col[idx]
+    t = np.asarray(t, float)
+    t = t[np.isfinite(t)]
+    return float(np.median(t)) if t.size else None
+
+
+def noise_temperature_finding(items: dict, record_c: float | None, bound_c: float):
+    """A flagged finding where any of :data:`NOISE_ITEMS` is measured: the noise items
+    (5.4.5.2, 5.4.5.1 b), c)) are stated at the gyro's temperature during the static record
+    (``record_c``, the readings' ``temperature_c``), which the chamber holds within
+    ± ``bound_c`` (:func:`gyro_temperature_bound_c`: its deviation bound and the gyro's
+    place in the volume, Table 2), not at T_BASE: the white level moves with temperature
+    and the readings give no coefficient for it, so their intervals carry no term for it."""
+    from gonio.result.findings import Finding
+
+    hit = [items[k].clause for k in NOISE_ITEMS if k in items and items[k].measured]
+    if not hit:
+        return None
+    at = "its stated temperature" if record_c is None else f"{record_c:g} °C"
+    return Finding(NOISE_TEMPERATURE_CODE,
+                   f"the noise items {', '.join(hit)} hold at the gyro's temperature during "
+                   f"the static record ({at}, the readings' temperature_c, with the gyro "
+                   f"within ± {bound_c:g} °C of it: the chamber's deviation and its place in "
+                   f"the volume), not at T_BASE: their intervals carry no term for the "
+                   f"noise's temperature dependence (no coefficient for it in the readings)",
+                   "flagged", clause="5.4.5",
+                   rule="the noise items at the static record's temperature")
+
+
 def scale_factor(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.1 eqs (1), (2): a_BASE, least squares over the 2n + 1 points (rest
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
