@@ -31,6 +31,7 @@ def test_the_finding_names_the_record_s_temperature_and_the_bound():
     assert t == 22.8
     f = I.noise_temperature_finding(_items(), t, 2.2)
     assert f.action == "flagged" and f.code == I.NOISE_TEMPERATURE_CODE
+    assert (f.test, f.column) == ("static", "temperature_c")
     for part in ("5.4.5.2", "5.4.5.1 b)", "5.4.5.1 c)", "22.8 °C", "± 2.2 °C", "not at T_BASE"):
         assert part in f.message
     only = I.noise_temperature_finding(_items(("inband_noise",)), t, 2.2)

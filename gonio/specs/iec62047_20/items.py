@@ -354,7 +354,7 @@ def noise_temperature_finding(items: dict, record_c: float | None, bound_c: floa
                    f"within ± {bound_c:g} °C of it: the chamber's deviation and its place in "
                    f"the volume), not at T_BASE: their intervals carry no term for the "
                    f"noise's temperature dependence (no coefficient for it in the readings)",
-                   "flagged", clause="5.4.5",
+                   "flagged", test="static", column="temperature_c", clause="5.4.5",
                    rule="the noise items at the static record's temperature")
 
 
