@@ -33,13 +33,22 @@ def test_rate_items_declare_the_scale_factor_and_never_write_the_context(pkg):
     items = importlib.import_module(f"gonio.specs.{pkg}.items")
     keys = [r[0] for r in items.ITEMS]
     order = item_order(keys, items.NEEDS)
-    assert order[0] == "scale_factor" and sorted(order) == sorted(keys)
+    # the scale factor comes first but for what it itself needs (IEC a_BASE: 5.1.3.4's
+    # chamber coefficient), each of which needs nothing
+    first = order.index("scale_factor")
+    assert set(order[:first]) == set(items.NEEDS.get("scale_factor", ())) \
+        and sorted(order) == sorted(keys)
+    assert all(not items.NEEDS.get(k) for k in order[:first])
     # every item reading K / a_BASE declares the scale factor
     src = (ROOT / "gonio" / "specs" / pkg / "items.py").read_text(encoding="utf-8")
     tree = ast.parse(src)
     fns = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
     for key, _, _, fn in items.ITEMS:
         reads = {a.attr for a in ast.walk(fns[fn.__name__]) if isinstance(a, ast.Attribute)}
+        if key in items.NEEDS.get("scale_factor", ()):
+            # computed before the scale factor (which needs it): must not read K or a_BASE
+            assert not reads & {"K", "a_base", "u_K_rel"}, key
+            continue
         if reads & {"K", "a_base", "u_K_rel"} or "_need" in src or "_miss" in src:
             assert key == "scale_factor" or "scale_factor" in items.NEEDS.get(key, ()), key
     # no item function assigns an attribute of the context (ctx.K = …)
