@@ -188,6 +188,26 @@ def test_exact_recovery_without_noise():
     assert np.max(np.abs(res0.bias_output - b.bias_output)) > 1e-3
 
 
+def test_figure_language_is_per_call():
+    """A Chinese drawing leaves no language behind: the next figure drawn without a language
+    is English (figure text was once a module-wide setting, so an English plot made after a
+    Chinese certificate in the same process came out in Chinese)."""
+    from matplotlib.text import Text
+
+    from gonio.specs.triad_alignment.figures import FIG_TEXT, alignment_figure
+
+    res = estimate_alignment(readings_of(run_alignment_session(protocol(), bench(), seed=1)))
+
+    def texts(fig):
+        return {t.get_text() for t in fig.findobj(Text)}
+
+    zh = texts(alignment_figure(res, lang="zh"))
+    en = texts(alignment_figure(res))
+    assert FIG_TEXT["cross_title"][1] in zh and FIG_TEXT["cross_title"][0] not in zh
+    assert FIG_TEXT["cross_title"][0] in en
+    assert not any("\u4e00" <= c <= "\u9fff" for t in en for c in t)
+
+
 def test_cross_axis_iec_5_2():
     """Constructed check of the IEC digest: 100 °/s about X, 3.0 mV, 6.0 mV/(°/s) → 0.5 %."""
     assert cross_axis_sensitivity_iec(3.0, 0.0, 6.0, 100.0) == pytest.approx(0.005, rel=1e-15)

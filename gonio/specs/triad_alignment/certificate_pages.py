@@ -30,8 +30,8 @@ from gonio.report.stated import interval_legend, item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
-from gonio.specs.triad_alignment.figures import (alignment_panels, language,
-                                                 thermal_check_panels, thermal_model_panels)
+from gonio.specs.triad_alignment.figures import (alignment_panels, thermal_check_panels,
+                                                 thermal_model_panels)
 
 AXES = "xyz"
 OFFDIAG = ("xy", "xz", "yx", "yz", "zx", "zy")
@@ -333,14 +333,13 @@ def _channel_figure(result, ch: str) -> dict:
 
 
 def _draw_alignment(fig, spec, result, L, truth=None) -> None:
-    language(L.get("_lang", "en"))
     data = _figure_series(result).get("alignment")
     if data is None:
         ax = fig.add_subplot(spec)
         ax.text(0.5, 0.5, L["not_measured"], ha="center", va="center",
                 transform=ax.transAxes)
         return
-    alignment_panels(fig, spec, data, (truth or {}).get("system_matrix"))
+    alignment_panels(fig, spec, data, (truth or {}).get("system_matrix"), L.get("_lang", "en"))
 
 
 def triad_figures(result) -> list[tuple]:
@@ -352,12 +351,10 @@ def triad_figures(result) -> list[tuple]:
     for ch in (_figure_series(result).get("thermal") or {}):
 
         def model(fig, spec, r, L, truth=None, ch=ch):
-            language(L.get("_lang", "en"))
-            thermal_model_panels(fig, spec, _channel_figure(r, ch))
+            thermal_model_panels(fig, spec, _channel_figure(r, ch), L.get("_lang", "en"))
 
         def check(fig, spec, r, L, truth=None, ch=ch):
-            language(L.get("_lang", "en"))
-            thermal_check_panels(fig, spec, _channel_figure(r, ch))
+            thermal_check_panels(fig, spec, _channel_figure(r, ch), L.get("_lang", "en"))
         figs.append((f"thermal-model-{ch}", text["fig_model"][0].format(ch=ch),
                      text["fig_model"][1].format(ch=ch), model))
         figs.append((f"thermal-check-{ch}", text["fig_check"][0].format(ch=ch),

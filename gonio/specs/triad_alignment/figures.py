@@ -21,7 +21,7 @@ from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
 from gonio.specs.triad_alignment.figure_data import alignment_series, channel_figure
 from gonio.units import dps_to_dph
 
-#: Figure text, (English, Chinese); the language is set per drawing by :func:`language`.
+#: Figure text, (English, Chinese); each drawing function takes its ``lang``.
 FIG_TEXT: dict[str, tuple[str, str]] = {
     "before_S": ("before: S_ij = M_ij/M_ii", "对准前：S_ij = M_ij/M_ii"),
     "after_true": ("after M⁻¹: true leakage ± 2u", "M⁻¹ 对准后：真实残余耦合 ± 2u"),
@@ -52,16 +52,11 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "k_title": ("K(ϑ, U), order {nt}/{nu}", "K(ϑ, U)，阶次 {nt}/{nu}"),
     "arw_title": ("ARW(ϑ), order {nt}", "ARW(ϑ)，阶次 {nt}"),
 }
-_LANG = {"lang": "en"}
 
 
-def language(lang: str) -> None:
-    """The language of the figure text drawn next (the certificate sets it before drawing)."""
-    _LANG["lang"] = lang
-
-
-def _t(key: str, **kw) -> str:
-    return FIG_TEXT[key][1 if _LANG["lang"] == "zh" else 0].format(**kw)
+def _t(lang: str, key: str, **kw) -> str:
+    """Figure text ``key`` in ``lang`` ("en" or "zh")."""
+    return FIG_TEXT[key][1 if lang == "zh" else 0].format(**kw)
 
 
 def _arr(values) -> np.ndarray:
@@ -73,17 +68,19 @@ def _num(v) -> float:
     return np.nan if v is None else float(v)
 
 
-def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:
+def alignment_figure(result: AlignmentResult, true_system_matrix=None,
+                     lang: str = "en") -> Figure:
     """Two panels: cross-axis sensitivity / leakage (‰) and the Allan deviation with the
     averaging-time choice (:func:`alignment_panels` on a new Figure)."""
     fig = Figure(figsize=(9.0, 3.6))
     alignment_panels(fig, fig.add_gridspec(1, 1)[0], alignment_series(result),
-                     true_system_matrix)
+                     true_system_matrix, lang)
     fig.tight_layout()
     return fig
 
 
-def alignment_panels(fig, spec, data: dict, true_system_matrix=None) -> None:
+def alignment_panels(fig, spec, data: dict, true_system_matrix=None,
+                     lang: str = "en") -> None:
     """The two panels of :func:`alignment_figure` drawn into ``spec`` (a SubplotSpec) of
     ``fig`` from the stored series ``data`` (``extra.figures.alignment``,
     :func:`~gonio.specs.triad_alignment.figure_data.alignment_series`) — the form the
@@ -95,53 +92,54 @@ def alignment_panels(fig, spec, data: dict, true_system_matrix=None) -> None:
     s = _arr(data["cross_axis"]) * 1e3
     u = _arr(data["u_cross_axis"]) * 1e3
     k = float(data["k"])
-    ax1.bar(x - 0.2, s, 0.4, yerr=k * u, label=_t("before_S"), color="tab:blue")
+    ax1.bar(x - 0.2, s, 0.4, yerr=k * u, label=_t(lang, "before_S"), color="tab:blue")
     lu = _arr(data["leakage_u"]) * 1e3
     if true_system_matrix is not None:
         lk = np.asarray(data["alignment_matrix"], dtype=float) \
             @ np.asarray(true_system_matrix) - np.eye(3)
         lv = np.array([lk["xyz".index(n[0]), "xyz".index(n[1])] for n in OFFDIAG]) * 1e3
         ax1.bar(x + 0.2, lv, 0.4, yerr=k * lu, color="tab:orange",
-                label=_t("after_true"))
+                label=_t(lang, "after_true"))
     else:
         ax1.bar(x + 0.2, np.zeros(6), 0.4, yerr=k * lu, color="tab:orange",
-                label=_t("after_0"))
+                label=_t(lang, "after_0"))
     ax1.set_xticks(x, [f"{n[0]}←{n[1]}" for n in OFFDIAG])
-    ax1.set_ylabel(_t("cross"))
-    ax1.set_title(_t("cross_title"))
+    ax1.set_ylabel(_t(lang, "cross"))
+    ax1.set_title(_t(lang, "cross_title"))
     ax1.legend(fontsize=7)
     avg = data["averaging"]
     if avg is None:
-        ax2.text(0.5, 0.5, _t("no_static"), ha="center", transform=ax2.transAxes)
+        ax2.text(0.5, 0.5, _t(lang, "no_static"), ha="center", transform=ax2.transAxes)
     else:
         tau = _arr(avg["tau_s"])
         for i, a in enumerate(avg["adev_dph"]):
-            ax2.loglog(tau, _arr(a), marker=".", label=_t("gyro", ch="xyz"[i]))
+            ax2.loglog(tau, _arr(a), marker=".", label=_t(lang, "gyro", ch="xyz"[i]))
         lim = dps_to_dph(float(avg["noise_limit_dps"]))
         ax2.axhline(lim, color="k", ls="--", lw=0.8,
-                    label=_t("limit", v=f"{lim:.1f}"))
+                    label=_t(lang, "limit", v=f"{lim:.1f}"))
         need = [t for t in _arr(avg["tau_needed_s"]) if np.isfinite(t)]
         if need:
             ax2.axvline(max(need), color="tab:red", ls=":", label=f"τ ≥ {max(need):g} s")
         ax2.set_xlabel("τ (s)")
-        ax2.set_ylabel(_t("adev"))
-        ax2.set_title(_t("avg_title"))
+        ax2.set_ylabel(_t(lang, "adev"))
+        ax2.set_title(_t(lang, "avg_title"))
         ax2.legend(fontsize=7)
 
 
-def thermal_figure(model: ChannelModel, compensation: Compensation | None = None) -> Figure:
+def thermal_figure(model: ChannelModel, compensation: Compensation | None = None,
+                   lang: str = "en") -> Figure:
     """Four panels for one gyro: bias(ϑ), scale factor(ϑ), ARW(ϑ) with fits and 2u bands
     at the reference supply; ramp blocks and residuals; compensation before/after."""
     fig = Figure(figsize=(10.0, 6.4))
     gs = fig.add_gridspec(2, 1)
     data = channel_figure(model, compensation)
-    thermal_model_panels(fig, gs[0], data)
-    thermal_check_panels(fig, gs[1], data)
+    thermal_model_panels(fig, gs[0], data, lang)
+    thermal_check_panels(fig, gs[1], data, lang)
     fig.tight_layout()
     return fig
 
 
-def thermal_model_panels(fig, spec, data: dict) -> None:
+def thermal_model_panels(fig, spec, data: dict, lang: str = "en") -> None:
     """The top row of :func:`thermal_figure` in ``spec`` from one gyro's stored series
     (:func:`~gonio.specs.triad_alignment.figure_data.channel_figure`):
     b(ϑ, U) and K(ϑ, U) with the fitted polynomials and their 2u prediction bands."""
@@ -159,9 +157,9 @@ def thermal_model_panels(fig, spec, data: dict) -> None:
         b, ub = _arr(lv["bias"]), _arr(lv["u_bias"])
         ax.plot(grid, b, lw=0.8)
         ax.fill_between(grid, b - 2 * ub, b + 2 * ub, alpha=0.2)
-    ax.set_xlabel(_t("theta_ref"))
-    ax.set_ylabel(_t("bias"))
-    ax.set_title(_t("b_title", ch=data["channel"], nt=bo["n_t"], nu=bo["n_u"]) + " "
+    ax.set_xlabel(_t(lang, "theta_ref"))
+    ax.set_ylabel(_t(lang, "bias"))
+    ax.set_title(_t(lang, "b_title", ch=data["channel"], nt=bo["n_t"], nu=bo["n_u"]) + " "
                  f"({bo['criterion']})")
     ax.legend(fontsize=6)
     ax = axs[0, 1]
@@ -175,10 +173,10 @@ def thermal_model_panels(fig, spec, data: dict) -> None:
                         alpha=0.2)
     ax.set_xlabel("ϑ (°C)")
     ax.set_ylabel("K/k0 − 1 (ppm)")
-    ax.set_title(_t("k_title", nt=so["n_t"], nu=so["n_u"]))
+    ax.set_title(_t(lang, "k_title", nt=so["n_t"], nu=so["n_u"]))
 
 
-def thermal_check_panels(fig, spec, data: dict) -> None:
+def thermal_check_panels(fig, spec, data: dict, lang: str = "en") -> None:
     """The bottom row of :func:`thermal_figure` in ``spec`` from one gyro's stored series
     (:func:`~gonio.specs.triad_alignment.figure_data.channel_figure`): the ramp blocks
     against the static-soak model, and the before/after compensation residuals (or ARW(ϑ))."""
@@ -189,35 +187,35 @@ def thermal_check_panels(fig, spec, data: dict) -> None:
     r = data["ramp"]
     if r is not None:
         bias = _arr(r["bias_dps"])
-        ax.plot(_arr(r["theta_c"]), bias, ".", ms=2, label=_t("ramp_obs"))
+        ax.plot(_arr(r["theta_c"]), bias, ".", ms=2, label=_t(lang, "ramp_obs"))
         ax.plot(_arr(r["theta_c"]), bias - _arr(r["residual_dps"]), lw=0.8,
-                label=_t("soak", v=f"{_num(r['rms_static_model_dps']):.2g}"))
-        ax.set_title(_t("ramp_title", lag=lag_phrase(r, _LANG["lang"]),
+                label=_t(lang, "soak", v=f"{_num(r['rms_static_model_dps']):.2g}"))
+        ax.set_title(_t(lang, "ramp_title", lag=lag_phrase(r, lang),
                         h=f"{_num(r['hysteresis_dps']):.2g}"),
                      fontsize=8)
         ax.set_xlabel("ϑ (°C)")
-        ax.set_ylabel(_t("bias"))
+        ax.set_ylabel(_t(lang, "bias"))
         ax.legend(fontsize=6)
     elif data["arw"] is not None:
-        ax.set_title(_t("no_ramp"))
+        ax.set_title(_t(lang, "no_ramp"))
     ax = axs[1, 1]
     comp = data["compensation"]
     if comp is not None:
         c = {k: _arr(v) for k, v in comp["points"].items()}
         ax.plot(c["theta_c"], c["bias_before_dps"], "o", ms=3,
-                label=_t("b_before", v=f"{_num(comp['rms_bias_before_dps']):.2g}"))
+                label=_t(lang, "b_before", v=f"{_num(comp['rms_bias_before_dps']):.2g}"))
         ax.plot(c["theta_c"], c["bias_after_dps"], "s", ms=3,
-                label=_t("b_after", v=f"{_num(comp['rms_bias_after_dps']):.2g}"))
+                label=_t(lang, "b_after", v=f"{_num(comp['rms_bias_after_dps']):.2g}"))
         ax2 = ax.twinx()
         ax2.plot(c["theta_c"], c["scale_before_rel"] * 1e6, "^", ms=3, color="tab:green",
-                 label=_t("k_before"))
+                 label=_t(lang, "k_before"))
         ax2.plot(c["theta_c"], c["scale_after_rel"] * 1e6, "v", ms=3, color="tab:red",
-                 label=_t("k_after"))
-        ax2.set_ylabel(_t("sf_err"))
+                 label=_t(lang, "k_after"))
+        ax2.set_ylabel(_t(lang, "sf_err"))
         ax2.legend(fontsize=6, loc="lower right")
-        ax.set_title(_t("comp_title"))
+        ax.set_title(_t(lang, "comp_title"))
         ax.set_xlabel("ϑ (°C)")
-        ax.set_ylabel(_t("resid"))
+        ax.set_ylabel(_t(lang, "resid"))
         ax.legend(fontsize=6, loc="upper left")
     elif data["arw"] is not None:
         ap = {c: _arr(v) for c, v in data["points"].items()}
@@ -228,4 +226,4 @@ def thermal_check_panels(fig, spec, data: dict) -> None:
         ax.fill_between(grid, a - 2 * ua, a + 2 * ua, alpha=0.2)
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel("ARW (°/√h)")
-        ax.set_title(_t("arw_title", nt=data["arw"]["n_t"]))
+        ax.set_title(_t(lang, "arw_title", nt=data["arw"]["n_t"]))
