@@ -117,3 +117,75 @@ def simulate_calibrate(calibrate_readings):
         readings = folder / "sim" / "readings.csv"
         return readings, calibrate_readings(readings, protocol, folder / "cal")
     return run
+
+
+# ------------------------------------------- runs made once per test session, all workers
+def _tree_digest(folder: Path) -> str:
+    """SHA-256 over the relative names and bytes of every file under ``folder``."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for p in sorted(q for q in folder.rglob("*") if q.is_file()):
+        h.update(p.relative_to(folder).as_posix().encode() + b"\0")
+        h.update(hashlib.sha256(p.read_bytes()).digest())
+    return h.hexdigest()
+
+
+@pytest.fixture(scope="session")
+def shared_run(tmp_path_factory):
+    """``shared_run(key, make) -> Path``: the folder ``make(folder)`` filled, made once per
+    test session whatever the number of xdist workers (the first worker to ask makes it
+    under a file lock in the session's shared temporary root; the others wait and read it).
+
+    For the expensive runs many test modules read and none changes (the built-in demo of a
+    specification, say): ``key`` names the run completely (every argument ``make`` uses). A
+    test that changes a file copies the folder into its own ``tmp_path`` first; at the end of
+    the session every shared folder a worker used must hold the bytes it was made with (the
+    fixture's teardown errs otherwise, naming the folder)."""
+    import fcntl
+    import re
+    import shutil
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                       # shared by the session's workers
+    root = root / "shared-runs"
+    root.mkdir(exist_ok=True)
+
+    def get(key: str, make) -> Path:
+        name = re.sub(r"[^A-Za-z0-9._=-]+", "_", key)
+        final, done = root / name, root / f"{name}.done"
+        with open(root / f"{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not done.exists():
+                work = root / f"{name}.partial"
+                shutil.rmtree(work, ignore_errors=True)
+                shutil.rmtree(final, ignore_errors=True)
+                work.mkdir()
+                make(work)
+                digest = _tree_digest(work)
+                work.rename(final)
+                done.write_text(digest, encoding="utf-8")
+        used[final] = done.read_text(encoding="utf-8")
+        return final
+
+    used: dict[Path, str] = {}
+    yield get
+    changed = [str(p) for p, d in used.items() if _tree_digest(p) != d]
+    assert not changed, f"shared runs changed by a test (copy before writing): {changed}"
+
+
+@pytest.fixture(scope="session")
+def shared_demo(shared_run):
+    """``shared_demo(spec, lang="en", seed=0, dcc=True) -> Path``: the folder of
+    :func:`gonio.pipeline.dispatch.demo` (readings, truth, results, certificate, DCC) of the
+    built-in programme on the default bench, made once per session (:func:`shared_run`):
+    read it, never write into it."""
+    def get(spec: str, lang: str = "en", seed: int = 0, dcc: bool = True) -> Path:
+        from gonio.pipeline.dispatch import demo
+
+        return shared_run(f"demo-{spec}-{lang}-seed{seed}-dcc{int(dcc)}",
+                          lambda out: demo(spec, out / "out", seed=seed, lang=lang,
+                                           dcc=dcc)) / "out"
+    return get
+
