@@ -334,7 +334,9 @@ def hysteresis_level_iec(reading: float, sds, h) -> np.ndarray:
     the study bench's chamber without lag) it is the exact distribution function of the
     reading, so G(M; H) of the truth H is uniform: its Φ⁻¹ is the statement's own level z
     (the probability integral transform). A σ of 0: that difference is exact (its factor
-    the indicator |δ| ≤ M). ``h``: one value or an array; returns G at each.
+    the indicator |δ| ≤ M). ``h``: one value or an array; returns G at each. Φ is
+    ``scipy.special.ndtr`` (what ``scipy.stats.norm.cdf`` evaluates, bit for bit, without its
+    argument checks: this runs inside the root search of :func:`hysteresis_upper_iec`).
 
     >>> from scipy.stats import norm
     >>> g = hysteresis_level_iec(1.0, [1.0, 2.0], [0.0, 0.5])
@@ -345,7 +347,7 @@ def hysteresis_level_iec(reading: float, sds, h) -> np.ndarray:
     ...                                            F(1, .5, 2) * F(1, 0, 1))), 12)
     True
     """
-    from scipy.stats import norm
+    from scipy.special import ndtr
 
     m, s = float(reading), as_array(sds, "sds")
     hh = np.atleast_1d(np.asarray(h, dtype=float))
@@ -356,7 +358,7 @@ def hysteresis_level_iec(reading: float, sds, h) -> np.ndarray:
     def fold(d, sj):
         if sj == 0.0:
             return (np.abs(d) <= m).astype(float)
-        return norm.cdf((m - d) / sj) - norm.cdf((-m - d) / sj)
+        return ndtr((m - d) / sj) - ndtr((-m - d) / sj)
 
     f0 = np.array([float(fold(np.zeros(1), float(sj))[0]) for sj in s])
     out = np.zeros_like(hh)
