@@ -2091,10 +2091,11 @@ def _transient_designs(tt: np.ndarray, n: int, P: int, nr: int):
     e^(−t/τ) over the blocks at ``tt``, its mean over the first ``nr`` samples, the design
     matrix [1, smoothed values] and its pseudo-inverse), the design of
     :func:`_transient_fits` (block and reference means of the model, not its values at the
-    block centres); the pseudo-inverse is computed once here, not per fit. The same
-    timing's design is computed once (:func:`functools.lru_cache` of the last 32 timings:
-    the replicates of one budget, its shares' reruns and repeated budgets reuse it;
-    read-only arrays, shared)."""
+    block centres); the pseudo-inverse is computed once here, not per fit, and so are each
+    τ's reach max|e_b − e_ref| and the unit vectors of the centred e_b (the screen of
+    :func:`_transient_candidates`). The same timing's design is computed once
+    (:func:`functools.lru_cache` of the last 32 timings: the replicates of one budget, its
+    shares' reruns and repeated budgets reuse it; read-only arrays, shared)."""
     return _transient_designs_cached(np.asarray(tt, float).tobytes(), int(n), int(P), int(nr))
 
 
@@ -2104,13 +2105,22 @@ def _transient_designs_cached(tt_bytes: bytes, n: int, P: int, nr: int):
     return _transient_designs_new(np.frombuffer(tt_bytes, float), n, P, nr)
 
 
+class _TauGrid(tuple):
+    """The τ grid of :func:`_transient_designs`: a tuple of (e_b, e_ref, A, A⁺) per τ, with
+    ``reach`` (each τ's max|e_b − e_ref|) and ``unit`` (rows: e_b less its mean, of unit
+    norm; 0 where e_b is constant)."""
+
+    reach: np.ndarray
+    unit: np.ndarray
+
+
 def _transient_designs_new(tt: np.ndarray, n: int, P: int, nr: int):
     """:func:`_transient_designs` computed afresh."""
     nb = tt.size
     dt = float(tt[1] - tt[0]) / P if nb > 1 else 1.0
     t_raw = dt * np.arange(max(n, nb * P, nr)) - 0.5 * (P - 1) * dt
     span = max(float(tt[-1] - tt[0]), dt * P)
-    out = []
+    out, reach, unit = [], [], []
     ones = np.ones(nb)
     for tau in np.geomspace(dt * P, 20 * span, 60):
         e = np.exp(-t_raw / tau)
@@ -2119,19 +2129,52 @@ def _transient_designs_new(tt: np.ndarray, n: int, P: int, nr: int):
         A_pinv = np.linalg.pinv(A)
         for arr in (eb, A, A_pinv):
             arr.setflags(write=False)
-        out.append((eb, float(e[:nr].mean()), A, A_pinv))
-    return out
+        er = float(e[:nr].mean())
+        out.append((eb, er, A, A_pinv))
+        reach.append(np.max(np.abs(eb - er)))
+        ec = eb - eb.mean()
+        norm = float(np.sqrt(ec @ ec))
+        unit.append(ec / norm if norm > 0 else np.zeros(nb))
+    grid = _TauGrid(out)
+    grid.reach, grid.unit = np.array(reach), np.array(unit).reshape(len(out), nb)
+    for arr in (grid.reach, grid.unit):
+        arr.setflags(write=False)
+    return grid
+
+
+#: Relative margin of :func:`_transient_candidates` (of Σy² of a row): far above the rounding
+#: of either residual sum of squares (about 1e-13 of it), far below their spread over τ.
+TRANSIENT_SCREEN_MARGIN = 1e-9
+
+
+def _transient_candidates(Y: np.ndarray, best: np.ndarray, design) -> np.ndarray:
+    """The τ of ``design`` that can win :func:`_transient_fits` for some row of ``Y``: the
+    residual sum of squares of c + A·e_b is Σ(y − ȳ)² − ((y − ȳ)·ê)², ê the unit vector of
+    the centred e_b (the closed form of a two-parameter least-squares fit), evaluated for
+    every τ at once; a τ is kept where it is within 2·:data:`TRANSIENT_SCREEN_MARGIN`·Σy²
+    of the row's least. The fit's own sums (through A⁺) differ from the closed form by
+    rounding alone, far below the margin, so the τ the fit picks is always kept; the rest
+    cannot be picked. τ whose e_b is constant are kept (the closed form does not see them)."""
+    Yc = Y - Y.mean(1, keepdims=True)
+    approx = best[:, None] - (Yc @ design.unit.T) ** 2
+    margin = 2.0 * TRANSIENT_SCREEN_MARGIN * (Y * Y).sum(1)
+    near = approx <= np.minimum(approx.min(1), best)[:, None] + margin[:, None]
+    near |= ~np.any(design.unit, axis=1)[None, :]
+    return np.flatnonzero(near.any(0))
 
 
 def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, float]]:
     """Least-squares c + A·e^(−t/τ) through each row of ``Y`` (smoothed values), τ from
     ``design`` (:func:`_transient_designs`), A = 0 kept where no τ does better: per row
-    (the model's smoothed values, its reference mean, its reading max|model − reference|)."""
+    (the model's smoothed values, its reference mean, its reading max|model − reference|).
+    The τ tried are those :func:`_transient_candidates` keeps, in the grid's order, each
+    fitted to every row as the full grid would be: the same τ, coefficients and bytes."""
     nrow, nb = Y.shape
     c0 = Y.mean(1)
     best = ((Y - c0[:, None]) ** 2).sum(1)
     cb, ab, kb = c0.copy(), np.zeros(nrow), np.full(nrow, -1)
-    for k, (_eb, _er, A, A_pinv) in enumerate(design):
+    for k in _transient_candidates(Y, best, design):
+        _eb, _er, A, A_pinv = design[k]
         coef = Y @ A_pinv.T                                                # (nrow, 2)
         sse = ((Y - coef @ A.T) ** 2).sum(1)
         better = sse < best
@@ -2144,7 +2187,7 @@ def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, floa
             out.append((np.full(nb, c), float(c), 0.0))
         else:
             eb, er = design[k][:2]
-            out.append((c + a * eb, float(c + a * er), float(abs(a) * np.max(np.abs(eb - er)))))
+            out.append((c + a * eb, float(c + a * er), float(abs(a) * design.reach[k])))
     return out
 
 
