@@ -177,15 +177,25 @@ def shared_run(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def shared_demo(shared_run):
-    """``shared_demo(spec, lang="en", seed=0, dcc=True) -> Path``: the folder of
-    :func:`gonio.pipeline.dispatch.demo` (readings, truth, results, certificate, DCC) of the
-    built-in programme on the default bench, made once per session (:func:`shared_run`):
-    read it, never write into it."""
-    def get(spec: str, lang: str = "en", seed: int = 0, dcc: bool = True) -> Path:
-        from gonio.pipeline.dispatch import demo
+    """``shared_demo(spec, lang="en", seed=0, lab=None) -> Path``: the folder ``gonio demo
+    --spec SPEC --lang LANG --seed SEED [--lab LAB]`` writes (readings, truth, results,
+    certificate, DCC), made once per session (:func:`shared_run`; a laboratory file is keyed
+    by its bytes): read it, never write into it."""
+    import contextlib
+    import hashlib
+    import io
 
-        return shared_run(f"demo-{spec}-{lang}-seed{seed}-dcc{int(dcc)}",
-                          lambda out: demo(spec, out / "out", seed=seed, lang=lang,
-                                           dcc=dcc)) / "out"
+    def get(spec: str, lang: str = "en", seed: int = 0, lab: Path | str | None = None) -> Path:
+        from gonio.cli import main
+
+        def make(folder: Path) -> None:
+            argv = ["demo", "--spec", spec, "--lang", lang, "--seed", str(seed),
+                    "--out", str(folder / "out")] + ([] if lab is None else ["--lab", str(lab)])
+            err = io.StringIO()
+            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+                rc = main(argv)
+            assert rc == 0, f"gonio {' '.join(argv)}: exit {rc}: {err.getvalue()}"
+
+        tag = "" if lab is None else "-lab" + hashlib.sha256(Path(lab).read_bytes()).hexdigest()[:16]
+        return shared_run(f"demo-{spec}-{lang}-seed{seed}{tag}", make) / "out"
     return get
-

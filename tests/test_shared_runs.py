@@ -34,3 +34,16 @@ def test_a_failed_make_is_made_again(shared_run):
         shared_run(key, broken)
     made = shared_run(key, lambda folder: (folder / "whole.txt").write_text("x"))
     assert sorted(p.name for p in made.iterdir()) == ["whole.txt"]
+
+
+def test_shared_demo_is_what_gonio_demo_writes(shared_demo, tmp_path):
+    """The shared demo folder holds the bytes `gonio demo` writes into a folder of its own."""
+    from gonio.cli import main
+
+    shared = shared_demo("triad-alignment", seed=5)
+    assert main(["demo", "--spec", "triad-alignment", "--seed", "5",
+                 "--out", str(tmp_path / "own")]) == 0
+    names = sorted(p.name for p in shared.iterdir() if p.is_file())
+    assert names == sorted(p.name for p in (tmp_path / "own").iterdir() if p.is_file())
+    for name in ("results.json", "readings.csv", "certificate.html"):
+        assert (shared / name).read_bytes() == (tmp_path / "own" / name).read_bytes(), name
