@@ -522,9 +522,7 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     tail = 0.5 * (1.0 - p)
     tail = max(tail - 2.0 * math.sqrt(tail * (1.0 - tail) / draws), 0.5 / draws)
     q_lo_p, q_hi_p = tail, 1.0 - tail
-    cols = _columns(e)
-    e_range = _row_ranges(cols)
-    e0 = float(np.mean(e_range))
+    cols, e_range, e0, patterns_of = _draws_prepared(e)
 
     def own(big_r: float, q: float) -> float:
         return float(_quantile_rows(_row_ranges(cols, big_r * unit), q))   # of R·unit + e
@@ -536,7 +534,7 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     elif n > _PAIR_MAX_N:                   # many values: R ± range(e) draw by draw
         crossing = _bounded_crossing(own, float(np.quantile(e_range, q_hi_p)))
     else:
-        *fam, n_splits = _three_level_patterns(e, n > _SPLIT_MAX_N)
+        *fam, n_splits = patterns_of(n > _SPLIT_MAX_N)
         e_hi = float(np.quantile(e_range, q_hi_p)) if n > _SPLIT_MAX_N else -math.inf
 
         def crossing(q: float, target: float) -> float:
@@ -552,6 +550,42 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     lo_end = crossing(q_hi_p, r)
     hi_end = max(crossing(q_lo_p, r), floor, lo_end)
     return float(lo_end), float(hi_end)
+
+
+#: The draws most recently prepared by :func:`_draws_prepared` (their bytes and shape →
+#: what depends on them alone): a study asks for thousands of intervals with one set of draws.
+_PREPARED: dict = {}
+_PREPARED_MAX = 2
+
+
+def _draws_prepared(e: np.ndarray):
+    """(the columns of the draws ``e`` (:func:`_columns`), each draw's range, their mean, a
+    function of ``outliers_only`` giving :func:`_three_level_patterns` of ``e``): what depends
+    on the draws alone, computed once for the same draws (equal bytes and shape; kept
+    read-only) and reused by later calls, with the same numbers."""
+    key = (e.shape, e.tobytes())
+    hit = _PREPARED.get(key)
+    if hit is None:
+        own_e = e.copy()                    # the caller may change its array later
+        cols = _columns(own_e)
+        e_range = _row_ranges(cols)
+        fams: dict = {}
+
+        def patterns_of(outliers_only: bool):
+            if outliers_only not in fams:
+                fam = _three_level_patterns(own_e, outliers_only)
+                for a in fam[:-1]:
+                    a.flags.writeable = False
+                fams[outliers_only] = fam
+            return fams[outliers_only]
+
+        cols.flags.writeable = False
+        e_range.flags.writeable = False
+        hit = (cols, e_range, float(np.mean(e_range)), patterns_of)
+        while len(_PREPARED) >= _PREPARED_MAX:
+            _PREPARED.pop(next(iter(_PREPARED)))
+        _PREPARED[key] = hit
+    return hit
 
 
 def _bounded_crossing(own, e_hi: float):

@@ -600,8 +600,22 @@ def segment_values(df: pd.DataFrame, cols) -> pd.DataFrame:
     keys = ["test", "run", "step"]
     if not cols:
         return df.groupby(keys, sort=False).first().reset_index()[keys]
-    how = {c: (_median_logged if c in MEASURED else _most_common_logged) for c in cols}
-    return df.groupby(keys, sort=False)[list(cols)].agg(how).reset_index()
+    g = df.groupby(keys, sort=False)
+    out = g.size().to_frame("_n")
+    for c in cols:
+        if c in MEASURED:           # the median of the logged numbers, group by group
+            x = pd.to_numeric(df[c], errors="coerce")
+            out[c] = x.groupby([df[k] for k in keys], sort=False).median().astype(float)
+            continue
+        # a set column: a segment whose logged cells all agree (the usual case) has that
+        # value, with no count per segment; the others are counted as _most_common_logged
+        col = g[c]
+        one, first = col.nunique(dropna=True), col.first()
+        val = first.astype(object).where(one == 1, np.nan)
+        for key in one.index[one > 1]:
+            val[key] = _most_common_logged(col.get_group(key))
+        out[c] = val.infer_objects() if val.dtype == object else val
+    return out.drop(columns="_n").reset_index()
 
 
 def _median_logged(v: pd.Series):
