@@ -205,31 +205,43 @@ def pipeline_memo(request, monkeypatch):
 
 
 @pytest.fixture(scope="session")
-def bench_readings(tmp_path_factory):
+def bench_readings(shared_run):
     """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual
-    bench."""
-    from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
-    from gonio.specs.ogam_draft.protocol import load_protocol
+    bench, made once per test session for every xdist worker (``shared_run``: read them,
+    never write beside them)."""
+    import hashlib
 
-    root = tmp_path_factory.mktemp("bench")
-    out = []
-    for seed in (1, 2):
-        session = run_session(load_protocol(SMALL_PROTOCOL), load_bench("rlg"), seed=seed)
-        write_session(session, root / f"run{seed}")
-        out.append(root / f"run{seed}" / "readings.csv")
-    return out
+    def make(root: Path) -> None:
+        from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+        from gonio.specs.ogam_draft.protocol import load_protocol
+
+        for seed in (1, 2):
+            session = run_session(load_protocol(SMALL_PROTOCOL), load_bench("rlg"), seed=seed)
+            write_session(session, root / f"run{seed}")
+
+    tag = hashlib.sha256(SMALL_PROTOCOL.read_bytes()).hexdigest()[:16]
+    root = shared_run(f"records-bench-rlg-small-protocol-{tag}-seeds-1-2", make)
+    return [root / f"run{seed}" / "readings.csv" for seed in (1, 2)]
 
 
 @pytest.fixture(scope="session")
-def computed_folder(bench_readings, tmp_path_factory):
+def computed_folder(bench_readings, shared_run):
     """One real pipeline run (readings of seed 1, small protocol, certificate and DCC):
-    what the worker stores, reused by the service tests so they need not recompute."""
-    from gonio.records.compute import calibrate_folder
+    what the worker stores, reused by the service tests so they need not recompute; made
+    once per test session for every xdist worker (``shared_run``: copy it into ``tmp_path``
+    before changing a file)."""
+    import hashlib
 
-    out = tmp_path_factory.mktemp("computed") / "out"
-    calibrate_folder(bench_readings[0], out, spec_key="ogam-draft",
-                     protocol=str(SMALL_PROTOCOL))
-    return out
+    def make(root: Path) -> None:
+        from gonio.records.compute import calibrate_folder
+
+        real = getattr(calibrate_folder, "__wrapped__", calibrate_folder)
+        real(bench_readings[0], root / "out", spec_key="ogam-draft",
+             protocol=str(SMALL_PROTOCOL))
+
+    tag = hashlib.sha256(bench_readings[0].read_bytes() + b"\0"
+                         + SMALL_PROTOCOL.read_bytes()).hexdigest()[:16]
+    return shared_run(f"records-computed-ogam-draft-small-protocol-{tag}", make) / "out"
 
 
 class Server:
