@@ -189,19 +189,43 @@ def pipeline_memo(request, monkeypatch):
     keyed by the SHA-256 of every input (tests/records/pipeline_memo.py): an import computes
     its folder's result again, an issue renders the stored result again, and these tests
     import the same folders and issue the same result with the same details many times (the
-    worker's calls too: its draft's pipeline, its issue's and redraft's rendering).
+    worker's calls too: its draft's pipeline, its issue's and redraft's rendering), shared by
+    the session's xdist workers (``session_memo``).
     ``@pytest.mark.real_pipeline``: without."""
     if request.node.get_closest_marker("real_pipeline"):
         return
     from gonio.records import compute, worker
 
-    from .pipeline_memo import memoised, memoised_render
+    from .pipeline_memo import _MEMO, _RENDER_MEMO, memoised, memoised_render
+
+    session_memo = request.getfixturevalue("session_memo")
 
     real = getattr(compute.calibrate_folder, "__wrapped__", compute.calibrate_folder)
-    monkeypatch.setattr(compute, "calibrate_folder", memoised(real))
-    monkeypatch.setattr(worker, "calibrate_folder", memoised(real))
+    memo = session_memo("pipeline", _MEMO)
+    monkeypatch.setattr(compute, "calibrate_folder", memoised(real, memo))
+    monkeypatch.setattr(worker, "calibrate_folder", memoised(real, memo))
     render = getattr(worker.render_folder, "__wrapped__", worker.render_folder)
-    monkeypatch.setattr(worker, "render_folder", memoised_render(render))
+    monkeypatch.setattr(worker, "render_folder",
+                        memoised_render(render, session_memo("render", _RENDER_MEMO)))
+
+
+@pytest.fixture(scope="session")
+def session_memo(tmp_path_factory):
+    """``session_memo(name, local)``: the memo of tests/records/pipeline_memo.py shared by
+    every xdist worker of this session (:class:`SessionMemo`, files under the session's
+    shared temporary root), with this process's dict ``local`` in front."""
+    from .pipeline_memo import SessionMemo
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                       # shared by the session's workers
+    made = {}
+
+    def get(name: str, local: dict) -> SessionMemo:
+        if name not in made:
+            made[name] = SessionMemo(root / "records-memo" / name, local)
+        return made[name]
+    return get
 
 
 @pytest.fixture(scope="session")

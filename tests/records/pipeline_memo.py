@@ -22,7 +22,8 @@ and returns what the pipeline returned; a failed run is never stored.
 Only the test suite uses it (the ``pipeline_memo`` fixture of ``tests/records/conftest.py``,
 on for every records test; ``@pytest.mark.real_pipeline`` runs a test without it): in
 production the same readings are never imported twice. It holds only what this process
-computed; nothing is written to disk."""
+computed, and what another process of the same test session (an xdist worker) computed
+(:class:`SessionMemo`: one file per key in the session's temporary folder, gone with it)."""
 
 from __future__ import annotations
 
@@ -30,6 +31,7 @@ import datetime as dt
 import hashlib
 import json
 import os
+import pickle
 from pathlib import Path
 
 import gonio
@@ -106,6 +108,46 @@ def through_memo(memo: dict, stats: dict, key: str, out: Path, compute, paths) -
     if not names_a_folder(files, *paths):
         memo[key] = (files, list(returned) if isinstance(returned, list) else returned)
     return returned
+
+
+class SessionMemo:
+    """A memo shared by every process of one test session (the xdist workers): this
+    process's ``local`` dict in front of one file per key in ``folder`` (the pickled output
+    files and return value, written to a temporary name and renamed into place, so that a
+    reader sees a whole entry or none). Two workers missing the same key at once both run
+    the call and write the same bytes; an entry that cannot be pickled or read stays in this
+    process only (a miss elsewhere)."""
+
+    def __init__(self, folder: Path, local: dict):
+        self.folder, self.local = Path(folder), local
+        self.folder.mkdir(parents=True, exist_ok=True)
+
+    def _path(self, key: str) -> Path:
+        return self.folder / f"{key}.pickle"
+
+    def __contains__(self, key: str) -> bool:
+        if key in self.local:
+            return True
+        try:
+            self.local[key] = pickle.loads(self._path(key).read_bytes())
+        except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError):
+            return False
+        return True
+
+    def __getitem__(self, key: str):
+        if key not in self:
+            raise KeyError(key)
+        return self.local[key]
+
+    def __setitem__(self, key: str, value) -> None:
+        self.local[key] = value
+        try:
+            data = pickle.dumps(value)
+        except Exception:                      # noqa: BLE001 - kept in this process only
+            return
+        tmp = self.folder / f"{key}.{os.getpid()}.partial"
+        tmp.write_bytes(data)
+        os.replace(tmp, self._path(key))
 
 
 def memoised(real, memo: dict | None = None, stats: dict | None = None):

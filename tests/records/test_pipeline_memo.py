@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from .conftest import SMALL_PROTOCOL
-from .pipeline_memo import memoised, memoised_render
+from .pipeline_memo import SessionMemo, memoised, memoised_render
 
 pytestmark = pytest.mark.real_pipeline        # each test builds its own memo
 
@@ -69,6 +69,31 @@ def test_same_inputs_elsewhere_hit_and_give_the_same_files(tmp_path):
     assert got1 == got2 == ["results.json", "tables/items.csv"]
     for name in got1:
         assert (tmp_path / "out1" / name).read_bytes() == (tmp_path / "out2" / name).read_bytes()
+
+
+def test_session_memo_shared_by_processes_and_a_changed_byte_misses(tmp_path):
+    """Two processes of one session (each its own dict, one shared folder): what one ran the
+    other reads without running (the same files, the same return value); another readings
+    byte runs again in either; an unreadable entry is a miss, never an error."""
+    runs, folder = [], tmp_path / "shared"
+    first = memoised(stub_pipeline(runs), SessionMemo(folder, {}), {"hits": 0, "misses": 0})
+    stats = {"hits": 0, "misses": 0}
+    second = memoised(stub_pipeline(runs), SessionMemo(folder, {}), stats)
+    got1 = call(first, inputs(tmp_path / "a"), tmp_path / "out1")
+    got2 = call(second, inputs(tmp_path / "b"), tmp_path / "out2")
+    assert len(runs) == 1 and stats == {"hits": 1, "misses": 0}
+    assert got1 == got2 == ["results.json", "tables/items.csv"]
+    for name in got1:
+        assert (tmp_path / "out1" / name).read_bytes() == (tmp_path / "out2" / name).read_bytes()
+    kw = inputs(tmp_path / "c")
+    kw["readings"].write_bytes(kw["readings"].read_bytes().replace(b"1\n", b"2\n"))
+    call(second, kw, tmp_path / "out3")
+    assert len(runs) == 2
+    for p in folder.iterdir():
+        p.write_bytes(b"not a pickle")
+    call(memoised(stub_pipeline(runs), SessionMemo(folder, {}), {"hits": 0, "misses": 0}),
+         inputs(tmp_path / "d"), tmp_path / "out4")
+    assert len(runs) == 3
 
 
 @pytest.mark.parametrize("change", ["readings", "beside", "protocol", "lab", "table", "options",
