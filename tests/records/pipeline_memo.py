@@ -32,6 +32,7 @@ import hashlib
 import json
 import os
 import pickle
+import threading
 from pathlib import Path
 
 import gonio
@@ -130,7 +131,7 @@ class SessionMemo:
             return True
         try:
             self.local[key] = pickle.loads(self._path(key).read_bytes())
-        except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError):
+        except Exception:                      # noqa: BLE001 - absent or unreadable: a miss
             return False
         return True
 
@@ -145,7 +146,7 @@ class SessionMemo:
             data = pickle.dumps(value)
         except Exception:                      # noqa: BLE001 - kept in this process only
             return
-        tmp = self.folder / f"{key}.{os.getpid()}.partial"
+        tmp = self.folder / f"{key}.{os.getpid()}.{threading.get_ident()}.partial"
         tmp.write_bytes(data)
         os.replace(tmp, self._path(key))
 
