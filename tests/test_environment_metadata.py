@@ -6,12 +6,22 @@ plainly on the certificate ("20 °C"), as a laboratory file's number is."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 
 from gonio.cli import main
 
 SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
+PINS = Path(__file__).parent / "data" / "pins"
+
+
+def protocol(spec: str) -> list[str]:
+    """The small programme of the pin test (tests/data/pins/SPEC-small.toml; the built-in one
+    where it has none): the environment is read and stated alike whatever the programme's
+    size, and the built-in programmes cost more CPU to simulate and to calibrate."""
+    small = PINS / f"{spec}-small.toml"
+    return ["--spec", spec, "--protocol", str(small)] if small.exists() else ["--spec", spec]
 
 
 def with_line(src, dst, line: str) -> None:
@@ -23,7 +33,7 @@ def with_line(src, dst, line: str) -> None:
 def simulated(tmp_path_factory):
     base = tmp_path_factory.mktemp("env")
     for spec in SPECS:
-        assert main(["simulate", "--spec", spec, "--seed", "3", "--out", str(base / spec)]) == 0
+        assert main(["simulate", *protocol(spec), "--seed", "3", "--out", str(base / spec)]) == 0
     return base
 
 
@@ -41,7 +51,7 @@ def test_environment_text_refused(simulated, spec, line, key, capsys):
     bad = folder / "bad.csv"
     with_line(folder / "readings.csv", bad, line)
     capsys.readouterr()
-    assert main(["calibrate", str(bad), "--out", str(folder / "out_bad")]) == 2
+    assert main(["calibrate", str(bad), *protocol(spec), "--out", str(folder / "out_bad")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err and "internal error" not in err, err
     assert key in err and "bad.csv" in err, err
@@ -60,7 +70,7 @@ def test_exponent_form_stated_plainly(simulated, spec, capsys):
     exp = folder / "exp.csv"
     with_line(src, exp, "# temperature_c: 2.05e1")
     capsys.readouterr()
-    assert main(["calibrate", str(exp), "--out", str(folder / "out_exp")]) == 0
+    assert main(["calibrate", str(exp), *protocol(spec), "--out", str(folder / "out_exp")]) == 0
     html = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ",
                                       (folder / "out_exp" / "certificate.html").read_text()))
     assert "20.5 °C" in html and "2.05e1" not in html
