@@ -946,20 +946,25 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
     >>> table = [(r"(\\w+) round (\\d+) is missing", "{1} 第 {2} 测回缺失")]
     >>> finding_text(f, labels("zh"), table, extra={"bias": "零偏"})
     '[标记] 6.2，round 列：零偏 第 3 测回缺失'
+    >>> finding_text({"action": "flagged", "clause": "thesis eq. 6.20", "message": "x"},
+    ...              labels("zh"), [(r"thesis eq\\. (\\S+)", "论文式 {1}")])
+    '[标记] 论文式 6.20：x'
     >>> finding_text({"action": "flagged", "message": "serial: the readings say 'A'"},
     ...              labels("en"))
     "[flagged] serial: the readings say 'A'"
     """
     zh = L.get("_lang") == "zh"
     act = FINDING_ACTIONS.get(f.get("action"), (f.get("action"),) * 2)[1 if zh else 0]
-    parts = [f.get("clause") or ""]
+    translate = translator(extra, COMMON_FINDINGS_ZH + tuple(table), own) if zh else None
+    clause = f.get("clause") or ""
+    parts = [(translate(clause) or clause) if zh and clause else clause]
     if f.get("column"):
         parts.append(f"{f['column']} 列" if zh else f"column {f['column']}")
     if f.get("line") is not None:
         parts.append(f"第 {f['line']} 行" if zh else f"line {f['line']}")
     msg = f.get("message") or ""
     if zh:
-        msg = translator(extra, COMMON_FINDINGS_ZH + tuple(table), own)(msg) or msg
+        msg = translate(msg) or msg
     where = ("，" if zh else ", ").join(p for p in parts if p)
     if not where:               # a finding of no clause, column or line (the identity's)
         return f"[{act}] {msg}"
