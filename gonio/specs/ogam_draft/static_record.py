@@ -46,6 +46,16 @@ def _number(v: float) -> str:
     return str(int(f)) if f.is_integer() and abs(f) < 2 ** 53 else repr(f)
 
 
+def _numbers(values: np.ndarray) -> list[str]:
+    """:func:`_number` of every value of a float array, the same texts (each float's
+    ``repr``; an integral one below 2⁵³ as its integer), made at C speed."""
+    out = list(map(repr, values.tolist()))
+    whole = np.flatnonzero((values == np.floor(values)) & (np.abs(values) < 2.0 ** 53))
+    for i, text in zip(whole.tolist(), map(str, values[whole].astype(np.int64).tolist())):
+        out[i] = text
+    return out
+
+
 def format_static_record(time_s, counts, *, nominal_scale_factor_counts_per_deg: float,
                          source: str, identity: dict | None = None) -> str:
     """The exact text of a static record file: the counter ``counts`` at the times
@@ -74,7 +84,7 @@ def format_static_record(time_s, counts, *, nominal_scale_factor_counts_per_deg:
     lines += [f"# {k}: {' '.join(str(v).split())}" for k, v in (identity or {}).items()
               if str(v).strip()]
     lines.append(",".join(COLUMNS))
-    lines += [f"{_number(a)},{_number(b)}" for a, b in zip(t.tolist(), c.tolist())]
+    lines += map(",".join, zip(_numbers(t), _numbers(c)))
     return "\n".join(lines) + "\n"
 
 
@@ -105,6 +115,42 @@ def read_static_record(path) -> StaticRecord:
     if i >= len(lines) or tuple(lines[i].strip().split(",")) != COLUMNS:
         raise GonioError(f"the header is not '{','.join(COLUMNS)}'", file=path, line=i + 1)
     head = i + 1
+    pairs = _number_pairs(lines[head:])
+    vals = [] if pairs is not None else _checked_pairs(lines, head, path)
+    arr = (pairs if pairs is not None else np.array(vals, dtype=float)).reshape(-1, 2)
+    t, c = arr[:, 0], arr[:, 1]
+    if len(t) < 2:
+        raise GonioError("fewer than two samples", file=path, line=head + 1)
+    back = np.diff(t) <= 0
+    if back.any():
+        raise GonioError("the time does not increase", file=path,
+                         line=head + 2 + int(np.argmax(back)), column="time_s")
+    from pathlib import Path
+    return StaticRecord(t, c / k, source=f"{Path(path).name}: {meta.get('source') or '(none)'}")
+
+
+def _number_pairs(body: list[str]) -> np.ndarray | None:
+    """The rows ``body`` as an (n, 2) float array read by Python's float (what
+    :func:`_checked_pairs` reads), or None where a row is not one pair of finite numbers
+    (:func:`_checked_pairs` then names it)."""
+    from itertools import repeat
+
+    if any(n != 1 for n in map(str.count, body, repeat(","))):
+        return None
+    try:
+        arr = np.array(list(map(float, ",".join(body).split(","))) if body else [],
+                       dtype=float)
+    except ValueError:
+        return None
+    return arr.reshape(-1, 2) if np.isfinite(arr).all() else None
+
+
+def _checked_pairs(lines: list[str], head: int, path) -> list[tuple[float, float]]:
+    """The number pairs of ``lines[head:]`` row by row; the first row that is not one pair
+    of finite numbers is a GonioError naming the file, line and column."""
+    import math
+
+    from gonio.errors import GonioError
     vals = []
     for n, ln in enumerate(lines[head:], head + 1):   # Python's float: round-trip exact
         a, sep, b = ln.partition(",")
@@ -118,16 +164,7 @@ def read_static_record(path) -> StaticRecord:
             if not math.isfinite(v):
                 raise GonioError("not a finite number", file=path, line=n, column=col)
         vals.append(pair)
-    arr = np.array(vals, dtype=float).reshape(-1, 2)
-    t, c = arr[:, 0], arr[:, 1]
-    if len(t) < 2:
-        raise GonioError("fewer than two samples", file=path, line=head + 1)
-    back = np.diff(t) <= 0
-    if back.any():
-        raise GonioError("the time does not increase", file=path,
-                         line=head + 2 + int(np.argmax(back)), column="time_s")
-    from pathlib import Path
-    return StaticRecord(t, c / k, source=f"{Path(path).name}: {meta.get('source') or '(none)'}")
+    return vals
 
 
 def named_static_record(readings_path, metadata: dict) -> StaticRecord | None:
