@@ -25,7 +25,6 @@ import re
 import pytest
 from lxml import etree
 
-from gonio.cli import main
 from gonio.report.dcc import DCC_NS, SI_NS
 from tests.statement_numbers import (by_interval, certificate_spans, check_k, measured,
                                      stated_value, value_field)
@@ -35,9 +34,9 @@ SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
 
 
 @pytest.fixture(scope="module", params=SPECS)
-def demo(request, tmp_path_factory):
-    d = tmp_path_factory.mktemp(request.param) / "demo"
-    assert main(["demo", "--spec", request.param, "--seed", "3", "--out", str(d)]) == 0
+def demo(request, shared_demo):
+    """``gonio demo --spec KEY --seed 3``'s folder, made once per session (read only)."""
+    d = shared_demo(request.param, seed=3)
     return {"spec": request.param, "dir": d,
             "res": json.loads((d / "results.json").read_text(encoding="utf-8")),
             "summary": (d / "summary.txt").read_text(encoding="utf-8"),

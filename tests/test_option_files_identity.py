@@ -147,13 +147,14 @@ def test_tilt_option_identity(optical, tmp_path):
     assert any(e.startswith("tilt.json:") for e in res["provenance"]["evidence"])
 
 
-def test_the_demo_static_record_states_the_serial(tmp_path):
+def test_the_demo_static_record_states_the_serial(shared_demo, tmp_path):
     """The optical demo's static record (named in its readings) carries the readings'
-    identity, so the demo's folder calibrates again under the unstated-identity rule."""
-    assert main(["demo", "--spec", "ogam-draft", "--out", str(tmp_path / "d")]) == 0
-    head = (tmp_path / "d" / "static_record.csv").read_text().splitlines()[:12]
+    identity, so the demo's folder calibrates again under the unstated-identity rule
+    (``gonio demo --spec ogam-draft``'s folder, shared: calibrate writes elsewhere)."""
+    d = shared_demo("ogam-draft")
+    head = (d / "static_record.csv").read_text().splitlines()[:12]
     assert "# serial: RLG-0001" in head
-    assert main(["calibrate", str(tmp_path / "d" / "readings.csv"), "--out",
+    assert main(["calibrate", str(d / "readings.csv"), "--out",
                  str(tmp_path / "again")]) == 0
 
 
