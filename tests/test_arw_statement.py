@@ -94,25 +94,36 @@ def test_arw_correction_widens_the_interval():
     assert same.u_c == pytest.approx(a.u_c, rel=1e-12)
 
 
+def _iec_arw_statement(gyro, seed: int, n: int):
+    """5.4.5.2's chain on ``n`` samples at 0.1 s of the bench gyro's own noise generator
+    (seed ``seed``, its reference temperature): the Allan deviation in °/h, the reading on
+    the Markov fit's −½ line, the five-term fit's line edf and lift factor, the statement.
+    Returns (value °/√h, its Uncertainty)."""
+    from gonio.analysis.noise import fit_markov_model, fit_noise_model
+    from gonio.bench.rate_gyro import NoiseState
+
+    x = NoiseState(gyro, np.random.default_rng(seed)).samples(n, 0.1,
+                                                              gyro.reference_temperature_c)
+    a = allan_deviation(x * 3600.0, 0.1, "rate", "decade:10", unit="deg/h")
+    value, _, ratio, _, mask = I.arw_reading(a, fit_markov_model(a))
+    five = fit_noise_model(a)
+    return value, I.arw_uncertainty(value, ratio, I.arw_line_edf(a, mask, five),
+                                    I.arw_lift_factor(a.tau_s, mask, five))
+
+
 def test_arw_statement_covers_the_bench_arw():
     """5.4.5.2's chain on the ADXRS610 bench's own noise generator (ARW, bias instability,
     rate random walk, quantisation), 60 seeds of the small protocol's 6000 samples: the bench's
     ARW parameter lies at or below the stated upper end as often as 95 % allows (binomial
     interval of the hits holding 0.95: not too narrow) and z = (value − truth)/u_c has a
     spread of 0.7–1.3 (not too wide) and a mean within 0.4."""
-    from gonio.analysis.noise import fit_markov_model, fit_noise_model
-    from gonio.bench.rate_gyro import NoiseState, load_rate_bench
+    from gonio.bench.rate_gyro import load_rate_bench
 
     g = load_rate_bench("mems-adxrs610").gyro
     truth = g.arw_deg_sqrt_h
     z, hits, trials = [], 0, 60
     for s in range(trials):
-        x = NoiseState(g, np.random.default_rng(1000 + s)).samples(6000, 0.1, g.reference_temperature_c)
-        a = allan_deviation(x * 3600.0, 0.1, "rate", "decade:10", unit="deg/h")
-        value, _, ratio, _, mask = I.arw_reading(a, fit_markov_model(a))
-        five = fit_noise_model(a)
-        u = I.arw_uncertainty(value, ratio, I.arw_line_edf(a, mask, five),
-                              I.arw_lift_factor(a.tau_s, mask, five))
+        value, u = _iec_arw_statement(g, 1000 + s, 6000)
         assert u.k is None and u.interval[0] == 0.0 and u.interval[1] > value
         hits += truth <= u.interval[1]
         z.append((value - truth) / u.u_c)
@@ -169,20 +180,13 @@ def test_arw_statement_covers_the_bench_arw_on_the_built_in_record():
     bench's ARW parameter: coverage of the upper end consistent with 95 % and z sd 0.7–1.3 on
     both sides (the correction's former line, half its size, made u over-wide: sd z 0.56,
     no exceedance in 200 records)."""
-    from gonio.analysis.noise import fit_markov_model, fit_noise_model
-    from gonio.bench.rate_gyro import NoiseState, load_rate_bench
+    from gonio.bench.rate_gyro import load_rate_bench
 
     g = load_rate_bench("mems-adxrs610").gyro
     truth = g.arw_deg_sqrt_h
     z, hits, trials = [], 0, 40
     for s in range(trials):
-        x = NoiseState(g, np.random.default_rng(5000 + s)).samples(72000, 0.1,
-                                                                   g.reference_temperature_c)
-        a = allan_deviation(x * 3600.0, 0.1, "rate", "decade:10", unit="deg/h")
-        value, _, ratio, _, mask = I.arw_reading(a, fit_markov_model(a))
-        five = fit_noise_model(a)
-        u = I.arw_uncertainty(value, ratio, I.arw_line_edf(a, mask, five),
-                              I.arw_lift_factor(a.tau_s, mask, five))
+        value, u = _iec_arw_statement(g, 5000 + s, 72000)
         hits += truth <= u.interval[1]
         z.append((value - truth) / u.u_c)
     z = np.array(z)
