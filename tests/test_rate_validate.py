@@ -30,11 +30,15 @@ def test_trial_seeds_are_seedsequence_children():
 
 def test_same_report_on_any_workers_and_batching(capsys):
     from gonio.cli import main
-    a = coverage_validate("iec62047-20", 2, seed=3, workers=1, show_progress=False)
+    # one worker through the CLI (which prints the report), two workers of one trial each
+    # through the API: the same JSON
+    capsys.readouterr()
+    assert main(["validate", "--spec", "iec62047-20", "--trials", "2", "--seed", "3",
+                 "--workers", "1", "--json"]) == 0
+    ja = capsys.readouterr().out
     b = coverage_validate("iec62047-20", 2, seed=3, workers=2, batch_size=1, show_progress=False)
-    ja = json.dumps(a.to_dict(), indent=2, ensure_ascii=False, allow_nan=False)
-    assert ja == json.dumps(b.to_dict(), indent=2, ensure_ascii=False, allow_nan=False)
-    d = a.to_dict()
+    assert ja == json.dumps(b.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    d = json.loads(ja)
     assert d["settings"]["trials"] == 2 and len(d["items"]) >= 20
     assert all(r["n"] == 2 for r in d["items"])
     # the coverage counts |value − truth| ≤ U of the trials themselves: rerun trial 0 alone
@@ -47,8 +51,14 @@ def test_same_report_on_any_workers_and_batching(capsys):
     from gonio.specs.iec62047_20.protocol import load_protocol
     with tempfile.TemporaryDirectory() as t:
         proto = load_protocol(str(reduced_protocol("iec62047-20", Path(t) / "r.toml")))
+    # trial 0 rerun alone; both through the batch function, whose text is trial 0's records
+    batch = run_batch(TrialJob("iec62047-20", job.bench, proto, 3), 0, 2)
     recs = [trial_records("iec62047-20", job.bench, proto,
-                          spawn_seed(3, get("iec62047-20").coverage.stream, i)) for i in (0, 1)]
+                          spawn_seed(3, get("iec62047-20").coverage.stream, 0))]
+    assert batch[0][2] == json.dumps(recs[0], sort_keys=True)
+    assert [(i, sd) for i, sd, _, _ in batch] == \
+        [(i, spawn_seed(3, get("iec62047-20").coverage.stream, i)) for i in (0, 1)]
+    recs.append(json.loads(batch[1][2]))
     # (an item stated by its interval alone: the truth inside that interval)
     for row in d["items"]:
         hits = sum(r[row["key"]]["interval"][0] <= r[row["key"]]["truth"]
@@ -56,13 +66,8 @@ def test_same_report_on_any_workers_and_batching(capsys):
                    else abs(r[row["key"]]["value"] - r[row["key"]]["truth"]) <= r[row["key"]]["U"]
                    for r in recs)
         assert row["hits"] == hits, row["key"]
-    assert run_batch(TrialJob("iec62047-20", job.bench, proto, 3), 1, 2)[0][2] == \
-        json.dumps(recs[1], sort_keys=True)
-    # the CLI prints the per-item table; the optical draft's options are refused
+    # the optical draft's options are refused
     capsys.readouterr()
-    assert main(["validate", "--spec", "iec62047-20", "--trials", "2", "--seed", "3",
-                 "--workers", "1", "--json"]) == 0
-    assert capsys.readouterr().out == ja + "\n"
     assert main(["validate", "--spec", "jjf1535-2015", "--trials", "2", "--truth",
                  "calibrated"]) == 2
     assert "--truth does not apply to 'gonio validate --spec jjf1535-2015'" in \
