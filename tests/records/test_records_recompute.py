@@ -33,13 +33,10 @@ NAMED = {"ogam-draft": "static_record.csv", "triad-alignment": "thermal.csv"}
 
 
 @pytest.fixture(scope="module", params=SPECS)
-def demo(request, tmp_path_factory):
-    """``gonio demo --spec KEY --seed 5`` (the folder and its specification key)."""
-    from gonio.cli import main
-
-    d = tmp_path_factory.mktemp(request.param) / "demo"
-    assert main(["demo", "--spec", request.param, "--seed", "5", "--out", str(d)]) == 0
-    return d, request.param
+def demo(request, shared_demo):
+    """``gonio demo --spec KEY`` (the session's shared folder, read only: a test copies it
+    before changing a file; and its specification key)."""
+    return shared_demo(request.param), request.param
 
 
 def calibrations(store) -> int:
