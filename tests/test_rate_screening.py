@@ -70,9 +70,17 @@ def _findings(spec, readings, proto):
     return r, js["findings"]
 
 
-def test_clean_file_has_no_finding(simulated):
+@pytest.fixture(scope="module")
+def clean(simulated):
+    """(result, findings) of the clean simulated file, calibrated once per specification for
+    the tests that compare a damaged copy with it (read only)."""
     spec, proto, readings, _ = simulated
-    _, found = _findings(spec, readings, proto)
+    return _findings(spec, readings, proto)
+
+
+def test_clean_file_has_no_finding(simulated, clean):
+    spec = simulated[0]
+    _, found = clean
     # IEC's statement on every file with noise items (flagged, no reading set aside): the
     # noise items hold at the record's temperature, not bounded at T_BASE
     stated = [f for f in found if f["code"] == "noise-temperature-not-bounded"]
@@ -87,7 +95,7 @@ def _sf_point(row, spec):
 
 
 @pytest.mark.parametrize("column", ("output", "rate_dps", "temperature_c", "time_s"))
-def test_a_typo_in_any_column_is_set_aside_by_line(simulated, column):
+def test_a_typo_in_any_column_is_set_aside_by_line(simulated, clean, column):
     spec, proto, readings, tmp = simulated
 
     seen = []
@@ -111,7 +119,7 @@ def test_a_typo_in_any_column_is_set_aside_by_line(simulated, column):
             _findings(spec, bad, proto)
         assert exc.value.line in (line, line + 1) and exc.value.column == "time_s"
         return
-    r_clean, _ = _findings(spec, readings, proto)
+    r_clean, _ = clean
     r, found = _findings(spec, bad, proto)
     hit = [f for f in found if f["line"] == line]
     assert hit and hit[0]["action"] == "set_aside" and hit[0]["column"] == column, found
@@ -297,7 +305,7 @@ def test_dense_spikes_under_the_row_limit_are_refused_by_the_tail_rule(simulated
         _findings(spec, tmp_path / "tail.csv", proto)
 
 
-def test_sparse_spikes_are_set_aside_by_line_and_stated(simulated, tmp_path):
+def test_sparse_spikes_are_set_aside_by_line_and_stated(simulated, clean, tmp_path):
     spec, proto, readings, _ = simulated
     bad = tmp_path / "sparse.csv"
     lines, n = _spiked(readings, bad, 97, 1000.0)                         # ≈ 1 %
@@ -308,7 +316,7 @@ def test_sparse_spikes_are_set_aside_by_line_and_stated(simulated, tmp_path):
     assert sorted(f["line"] for f in out) == lines and all(
         f["action"] == "set_aside" and f["column"] == "output" for f in out), js["findings"]
     assert f"{len(lines)} reading(s) set aside" in js["extra"]["screening"]
-    clean = get(spec).calibrate(str(readings), str(proto))
+    clean = clean[0]
     for key, it in result.items.items():          # nothing of the spikes reaches an item
         if it.measured and clean.items[key].measured and it.uncertainty is not None:
             assert abs(it.value - clean.items[key].value) <= 0.5 * it.uncertainty.U, key
