@@ -187,17 +187,17 @@ def test_python_excerpt_is_in_its_file(doc, block):
 
 
 @pytest.fixture(scope="module")
-def promised_folder(tmp_path_factory):
+def promised_folder(tmp_path_factory, shared_demo):
     """A folder holding what the documents' Python blocks may use: the schema copy at
-    tests/data/dcc-3.3.0 and a demo-out/ with a DCC (the rate demo: the same writer)."""
+    tests/data/dcc-3.3.0 and a demo-out/ with a DCC (the rate demo: the same writer), a copy
+    of what ``gonio demo --spec jjf1535-2015 --seed 3`` writes (the session's shared folder:
+    a block may write into its own copy)."""
+    import shutil
+
     d = tmp_path_factory.mktemp("docs-run")
     (d / "tests" / "data").mkdir(parents=True)
     (d / "tests" / "data" / "dcc-3.3.0").symlink_to(ROOT / "tests" / "data" / "dcc-3.3.0")
-    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    r = subprocess.run([sys.executable, "-m", "gonio", "demo", "--spec", "jjf1535-2015",
-                        "--seed", "3", "--out", "demo-out"], cwd=d, env=env,
-                       capture_output=True, text=True, timeout=900)
-    assert r.returncode == 0, r.stderr
+    shutil.copytree(shared_demo("jjf1535-2015", seed=3), d / "demo-out", symlinks=True)
     return d
 
 

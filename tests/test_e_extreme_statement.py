@@ -16,10 +16,7 @@ from __future__ import annotations
 import copy
 import json
 import math
-import os
 import re
-import subprocess
-import sys
 from decimal import ROUND_CEILING, Decimal
 from pathlib import Path
 
@@ -79,15 +76,10 @@ def upper_text(hi: float, m: float) -> str:
 
 
 @pytest.fixture(scope="module")
-def demo(tmp_path_factory):
-    base = tmp_path_factory.mktemp("e_demo")
-    out = base / "demo"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    r = subprocess.run([sys.executable, "-m", "gonio", "demo", "--spec", "ogam-draft",
-                        "--seed", "3", "--out", str(out)], cwd=base, env=env,
-                       capture_output=True, text=True, timeout=1200)
-    assert r.returncode == 0, r.stderr[-2000:]
-    return out
+def demo(shared_demo):
+    """What ``gonio demo --spec ogam-draft --seed 3`` writes (the session's shared folder,
+    made through the command line once for every file that reads it; read only)."""
+    return shared_demo("ogam-draft", seed=3)
 
 
 def e_row(summary: str) -> str:
