@@ -712,6 +712,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
+    if lab_stds:                 # named before the (costly) recomputation; checked again there
+        with store.session() as s:
+            lab_standard_ids(s, lab_stds, day or import_day(store), lab)
     tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
                                             table_calibration)
     man = check_manifest(folder)    # the folder as gonio wrote it, then what it says checked
