@@ -248,6 +248,15 @@ def lab_standard_ids(s, standards: list, day: _dt.date, lab) -> list[int]:
     return ids
 
 
+def _check_lab_standards(store, standards: list, day: _dt.date | None, lab) -> None:
+    """:func:`lab_standard_ids` before an import's recomputation (checked again when it is
+    recorded): a laboratory file's standard that is not registered or not valid on ``day``
+    (None: the import day) refuses the import before any work."""
+    if standards:
+        with store.session() as s:
+            lab_standard_ids(s, standards, day or import_day(store), lab)
+
+
 def lab_environment(details: dict) -> dict:
     """The environment a laboratory file's ``[environment]`` gives, as a calibration's
     columns: the numbers with the digits the file writes them with
@@ -712,9 +721,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
-    if lab_stds:                 # named before the (costly) recomputation; checked again there
-        with store.session() as s:
-            lab_standard_ids(s, lab_stds, day or import_day(store), lab)
+    _check_lab_standards(store, lab_stds, day, lab)     # before the (costly) recomputation
     tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
                                             table_calibration)
     man = check_manifest(folder)    # the folder as gonio wrote it, then what it says checked
