@@ -268,18 +268,37 @@ def computed_folder(bench_readings, shared_run):
     return shared_run(f"records-computed-ogam-draft-small-protocol-{tag}", make) / "out"
 
 
+@pytest.fixture(scope="session")
+def server_memo(tmp_path_factory) -> Path:
+    """The folder of the pipeline's and the rendering's memos shared by the session's servers
+    (``serve.start(..., memo=True)``) and xdist workers: :func:`session_memo`'s."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                       # shared by the session's workers
+    return root / "records-memo"
+
+
 class Server:
     """Start and stop ``gonio serve`` processes (each in its own process group, so that a
-    test can kill the server together with its worker processes)."""
+    test can kill the server together with its worker processes). ``memo``: the folder of
+    the memo its workers' pipeline and rendering share (the browser tests' calibrations made
+    again with the same inputs: the same bytes); None: every run computes."""
 
-    def __init__(self):
+    def __init__(self, memo: Path | None = None):
         self.procs = []
+        self.memo = memo
 
-    def start(self, data: Path, workers: int = 2, database: str | None = None):
+    def start(self, data: Path, workers: int = 2, database: str | None = None,
+              memo: bool = False):
+        """A ``gonio serve`` on ``data``; ``memo``: its workers behind the session's memo
+        (:func:`server_memo`)."""
         import sys
         import urllib.request
 
+        from .pipeline_memo import server_environment
+
         url = ["--database", database] if database else []
+        env = server_environment(self.memo) if memo and self.memo is not None else None
         for attempt in range(5):
             # a free port may be taken before the server binds it (another pytest-xdist
             # worker, any client's ephemeral port): a server that could not bind it is
@@ -288,7 +307,7 @@ class Server:
             proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data",
                                      str(data), "--port", str(port), "--workers", str(workers),
                                      *url], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                    start_new_session=True)
+                                    start_new_session=True, env=env)
             self.procs.append(proc)
             answer = self._wait(proc, port)
             if answer is not None:
@@ -327,9 +346,9 @@ class Server:
 
 
 @pytest.fixture
-def serve():
+def serve(server_memo):
     """A :class:`Server`; every server it started is stopped after the test."""
-    srv = Server()
+    srv = Server(server_memo)
     yield srv
     for p in srv.procs:
         srv.stop(p)

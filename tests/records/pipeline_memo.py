@@ -45,6 +45,17 @@ def _add(h, tag: str, data: bytes) -> None:
     h.update(tag.encode("utf-8") + b"\0" + len(data).to_bytes(8, "big") + data)
 
 
+#: where a worker process finds the records (gonio.records.worker reads them before it
+#: calls the pipeline; the pipeline and the rendering never read them): not part of a key
+RECORDS_LOCATION = ("GONIO_RECORDS_DATABASE", "GONIO_RECORDS_DATA")
+
+
+def _environment() -> dict:
+    """The ``GONIO_*`` variables a key holds (all but :data:`RECORDS_LOCATION`)."""
+    return {k: v for k, v in os.environ.items()
+            if k.startswith("GONIO_") and k not in RECORDS_LOCATION}
+
+
 def pipeline_key(readings, *, spec_key: str, protocol=None, lab=None, table_calibration=None,
                  gyro_type=None, options=None, record=None) -> str:
     """The SHA-256 of every input :func:`gonio.records.compute.calibrate_folder` reads."""
@@ -72,8 +83,7 @@ def pipeline_key(readings, *, spec_key: str, protocol=None, lab=None, table_cali
                     _add(h, name + "-beside:" + q.name, q.read_bytes())
         else:                                  # a built-in protocol's name
             _add(h, name + "=" + str(f), b"")
-    env = {k: v for k, v in os.environ.items() if k.startswith("GONIO_")}
-    _add(h, "env", json.dumps(env, sort_keys=True).encode())
+    _add(h, "env", json.dumps(_environment(), sort_keys=True).encode())
     _add(h, "date", dt.date.today().isoformat().encode())
     return h.hexdigest()
 
@@ -111,6 +121,15 @@ def through_memo(memo: dict, stats: dict, key: str, out: Path, compute, paths) -
     return returned
 
 
+def _held(memo, key: str):
+    """The memo's lock on ``key`` where it has one (:meth:`SessionMemo.lock`: another process
+    computing the same key is waited for, then read), else nothing."""
+    import contextlib
+
+    lock = getattr(memo, "lock", None)
+    return lock(key) if lock is not None else contextlib.nullcontext()
+
+
 class SessionMemo:
     """A memo shared by every process of one test session (the xdist workers): this
     process's ``local`` dict in front of one file per key in ``folder`` (the pickled output
@@ -125,6 +144,21 @@ class SessionMemo:
 
     def _path(self, key: str) -> Path:
         return self.folder / f"{key}.pickle"
+
+    def lock(self, key: str):
+        """An exclusive lock on ``key`` across processes, held while one computes it: a
+        second process asking for it (a browser test's server worker; the month's two back
+        ends at once under xdist) waits, then reads the entry (:func:`_held`)."""
+        import contextlib
+        import fcntl
+
+        @contextlib.contextmanager
+        def held():
+            with open(self.folder / f"{key}.lock", "w") as f:
+                fcntl.flock(f, fcntl.LOCK_EX)
+                yield
+
+        return held()
 
     def __contains__(self, key: str) -> bool:
         if key in self.local:
@@ -165,9 +199,10 @@ def memoised(real, memo: dict | None = None, stats: dict | None = None):
         out = Path(out)
         if out.exists() and any(out.iterdir()):
             return real(readings, out, **kw)             # not the case the memo knows
-        return through_memo(memo, stats, pipeline_key(readings, **kw), out,
-                            lambda: real(readings, out, **kw),
-                            (readings, protocol, lab, table_calibration, out))
+        key = pipeline_key(readings, **kw)
+        with _held(memo, key):
+            return through_memo(memo, stats, key, out, lambda: real(readings, out, **kw),
+                                (readings, protocol, lab, table_calibration, out))
     calibrate_folder.__wrapped__ = real
     return calibrate_folder
 
@@ -200,8 +235,7 @@ def render_key(results: bytes, *, spec_key: str, lab, lang: str = "en") -> str:
     for q in sorted(lab.parent.iterdir()):            # the files beside it (it may name them)
         if q.is_file() and q.stat().st_size < 2**24:
             _add(h, "lab-beside:" + q.name, q.read_bytes())
-    env = {k: v for k, v in os.environ.items() if k.startswith("GONIO_")}
-    _add(h, "env", json.dumps(env, sort_keys=True).encode())
+    _add(h, "env", json.dumps(_environment(), sort_keys=True).encode())
     _add(h, "date", dt.date.today().isoformat().encode())
     return h.hexdigest()
 
@@ -217,7 +251,52 @@ def memoised_render(real, memo: dict | None = None, stats: dict | None = None):
         out = Path(out)
         if (out.exists() and any(out.iterdir())) or not Path(lab).is_file():
             return real(results, out, **kw)              # not the case the memo knows
-        return through_memo(memo, stats, render_key(results, **kw), out,
-                            lambda: real(results, out, **kw), (lab, out))
+        key = render_key(results, **kw)
+        with _held(memo, key):
+            return through_memo(memo, stats, key, out, lambda: real(results, out, **kw),
+                                (lab, out))
     render_folder.__wrapped__ = real
     return render_folder
+
+
+# ---------------------------------------------------------------------------------------------
+# The same memos across processes: the browser tests drive a real ``gonio serve``, whose worker
+# processes run the pipeline and the rendering (about 25 s and 12 s each); the month of the
+# laboratory on SQLite and on PostgreSQL computes and renders the same calibrations with the
+# same details (the same bytes). :class:`SessionMemo` keeps a memo's entries as files in a
+# folder shared by the session (every xdist worker and every server process); ``server_memo/
+# sitecustomize.py`` puts the server's workers behind it (:func:`install_in_process`) where the
+# environment names that folder (:data:`SERVER_MEMO_VARIABLE`: not a ``GONIO_*`` variable, so
+# not part of any key). The first process to meet a key computes it for real.
+
+#: the environment variable that names the folder of the memo a server's workers share
+SERVER_MEMO_VARIABLE = "RECORDS_TEST_SERVER_MEMO"
+SERVER_MEMO_BOOT = Path(__file__).resolve().parent / "server_memo"
+
+
+def install_in_process(folder) -> None:
+    """Put this process's :func:`gonio.records.compute.calibrate_folder` and
+    :func:`~gonio.records.compute.render_folder` behind the memos kept in ``folder``
+    (:class:`SessionMemo`: the test session's), before :mod:`gonio.records.worker` imports
+    them."""
+    from gonio.records import compute
+
+    if hasattr(compute.calibrate_folder, "__wrapped__"):
+        return
+    folder = Path(folder)
+    compute.calibrate_folder = memoised(compute.calibrate_folder,
+                                        SessionMemo(folder / "pipeline", {}),
+                                        {"hits": 0, "misses": 0})
+    compute.render_folder = memoised_render(compute.render_folder,
+                                            SessionMemo(folder / "render", {}),
+                                            {"hits": 0, "misses": 0})
+
+
+def server_environment(folder) -> dict:
+    """The environment of a ``gonio serve`` whose workers share the memo in ``folder``."""
+    path = [str(SERVER_MEMO_BOOT)]
+    if os.environ.get("PYTHONPATH"):
+        path.append(os.environ["PYTHONPATH"])
+    path.append(str(Path(__file__).resolve().parents[2]))       # tests.records importable
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(path),
+                **{SERVER_MEMO_VARIABLE: str(folder)})

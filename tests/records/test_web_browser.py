@@ -35,7 +35,7 @@ def live(tmp_path, serve):
     services.set_settings(st, None, lab_name="Example Angle Laboratory",
                           lab_address="1 Example Road")
     st.close()
-    proc, base = serve.start(data)
+    proc, base = serve.start(data, memo=True)
     yield base, data
     serve.stop(proc)
 
@@ -96,7 +96,7 @@ def wait_status(page, want: str, timeout_s: float = 600) -> None:
             raise AssertionError(got["error"])
         if state == want:
             break
-        time.sleep(1.0)
+        time.sleep(0.2)
     else:
         raise AssertionError(f"calibration still {state} after {timeout_s} s")
     for attempt in range(5):          # a refresh the page had started may abort a goto
@@ -122,14 +122,12 @@ def upload(page, base: str, inst_url: str, readings: Path, day: str) -> str:
     return page.url
 
 
-def test_whole_workflow_in_chromium(live, browser, bench_readings, tmp_path):
-    base, data = live
-    shot = Shots()
-    page = browser.new_page(viewport={"width": 1280, "height": 900}, accept_downloads=True)
-    page.goto(base + "/instruments")                 # no session: the login page
-    assert page.url == base + "/login"
-    shot(page, "login")
-    log_in(page, base, "tech")
+def register(page, base: str, shot=None) -> str:
+    """A customer, a standard and an instrument (with a limit), as the technician; the
+    instrument's URL. The browser tests register the same ones: their first calibration
+    (the same readings, date and details) is then the same pipeline run, computed once in a
+    session (``serve.start(..., memo=True)``)."""
+    shot = shot or (lambda page, name: None)
     page.goto(base + "/customers")
     page.fill("input[name=name]", "Example Navigation Instruments Co.")
     page.fill("textarea[name=address]", "2 Sample Street, Xi'an")
@@ -154,7 +152,18 @@ def test_whole_workflow_in_chromium(live, browser, bench_readings, tmp_path):
     shot(page, "instrument-register")
     page.click("button:has-text('Register')")
     page.wait_for_url(re.compile(r".*/instruments/\d+$"))
-    inst_url = page.url
+    return page.url
+
+
+def test_whole_workflow_in_chromium(live, browser, bench_readings, tmp_path):
+    base, data = live
+    shot = Shots()
+    page = browser.new_page(viewport={"width": 1280, "height": 900}, accept_downloads=True)
+    page.goto(base + "/instruments")                 # no session: the login page
+    assert page.url == base + "/login"
+    shot(page, "login")
+    log_in(page, base, "tech")
+    inst_url = register(page, base, shot)
     cal_url = upload(page, base, inst_url, bench_readings[0], "2025-11-20")
     shot(page, "calibration-running")
     assert page.locator("h1 .status").inner_text() in ("queued", "running", "computed")

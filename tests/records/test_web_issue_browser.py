@@ -12,31 +12,10 @@ import sqlite3
 
 from lxml import etree
 
-from .test_web_browser import browser, live, log_in, log_out, upload, wait_status  # noqa: F401
+from .test_web_browser import (browser, live, log_in, log_out, register, upload,  # noqa: F401
+                               wait_status)
 
 NS = {"dcc": "https://ptb.de/dcc"}
-
-
-def register(page, base: str) -> str:
-    """A customer, a standard and an instrument, as the technician; the instrument's URL."""
-    page.goto(base + "/customers")
-    page.fill("input[name=name]", "Example Navigation Instruments Co.")
-    page.fill("textarea[name=address]", "2 Sample Street\nXi'an")
-    page.click("text=Add customer")
-    page.goto(base + "/standards")
-    page.fill("input[name=name]", "Precision rotary table")
-    page.fill("input[name=identifier]", "RT-07")
-    page.fill("input[name=due_on]", "2030-01-01")
-    page.click("text=Add standard")
-    page.goto(base + "/instruments")
-    page.fill("input[name=kind]", "RLG goniometer")
-    page.fill("input[name=manufacturer]", "gonio virtual bench")
-    page.fill("input[name=model]", "RLG-GM-1")
-    page.fill("input[name=serial]", "RLG-0001")
-    page.select_option("select[name=spec_key]", "ogam-draft")
-    page.click("button:has-text('Register')")
-    page.wait_for_url(re.compile(r".*/instruments/\d+$"))
-    return page.url
 
 
 def certificate_view(page, url: str) -> str:

@@ -42,7 +42,7 @@ def month(request, tmp_path, serve):
     services.set_settings(st, None, lab_name="Example Angle Laboratory",
                           lab_address="1 Example Road\nXi'an")
     st.close()
-    proc, base = serve.start(data, database=url)
+    proc, base = serve.start(data, database=url, memo=True)
     yield base, data, url, request.param
     serve.stop(proc)
 
