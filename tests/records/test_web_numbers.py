@@ -26,7 +26,6 @@ import re
 import pytest
 from lxml import etree
 
-from gonio.cli import main
 from gonio.records import services
 from gonio.report.i18n import labels
 from tests.own_readings import own_text
@@ -62,16 +61,16 @@ def web_client(store, name: str = "tech"):
 
 
 @pytest.fixture(scope="module", params=SPECS)
-def recorded(request, tmp_path_factory):
-    """The demo of one specification, recorded with a standard and the readings' environment
-    (its draft certificate rendered from the stored result): the folder, results.json, the
-    store, the calibration's id and a logged-in client."""
+def recorded(request, tmp_path_factory, shared_demo):
+    """The demo of one specification (``gonio demo --seed 3``: the session's shared one,
+    tests/test_one_statement.py reads it too; read only), recorded with a standard and the
+    readings' environment (its draft certificate rendered from the stored result): the
+    folder, results.json, the store, the calibration's id and a logged-in client."""
     from gonio.records.db import open_store
     from gonio.records.importer import record_output_folder
 
     root = tmp_path_factory.mktemp(request.param)
-    d = root / "demo"
-    assert main(["demo", "--spec", request.param, "--seed", "3", "--out", str(d)]) == 0
+    d = shared_demo(request.param, seed=3)
     store = open_store(None, root / "data")
     tech = make_people(store)["tech"]
     services.add_standard(store, tech, name="reference rotary table", identifier="ENV-STD-1",
