@@ -60,15 +60,20 @@ def call(memo_fn, kw: dict, out: Path):
     return memo_fn(kw.pop("readings"), out, **kw)
 
 
+def same_outputs(tmp_path: Path, got1: list, got2: list) -> None:
+    """Two calls wrote the stub's two files, out1's bytes the same as out2's."""
+    assert got1 == got2 == ["results.json", "tables/items.csv"]
+    for name in got1:
+        assert (tmp_path / "out1" / name).read_bytes() == (tmp_path / "out2" / name).read_bytes()
+
+
 def test_same_inputs_elsewhere_hit_and_give_the_same_files(tmp_path):
     runs, memo, stats = [], {}, {"hits": 0, "misses": 0}
     fn = memoised(stub_pipeline(runs), memo, stats)
     got1 = call(fn, inputs(tmp_path / "a"), tmp_path / "out1")
     got2 = call(fn, inputs(tmp_path / "b"), tmp_path / "out2")
     assert len(runs) == 1 and stats == {"hits": 1, "misses": 1}
-    assert got1 == got2 == ["results.json", "tables/items.csv"]
-    for name in got1:
-        assert (tmp_path / "out1" / name).read_bytes() == (tmp_path / "out2" / name).read_bytes()
+    same_outputs(tmp_path, got1, got2)
 
 
 def test_session_memo_shared_by_processes_and_a_changed_byte_misses(tmp_path):
@@ -82,9 +87,7 @@ def test_session_memo_shared_by_processes_and_a_changed_byte_misses(tmp_path):
     got1 = call(first, inputs(tmp_path / "a"), tmp_path / "out1")
     got2 = call(second, inputs(tmp_path / "b"), tmp_path / "out2")
     assert len(runs) == 1 and stats == {"hits": 1, "misses": 0}
-    assert got1 == got2 == ["results.json", "tables/items.csv"]
-    for name in got1:
-        assert (tmp_path / "out1" / name).read_bytes() == (tmp_path / "out2" / name).read_bytes()
+    same_outputs(tmp_path, got1, got2)
     kw = inputs(tmp_path / "c")
     kw["readings"].write_bytes(kw["readings"].read_bytes().replace(b"1\n", b"2\n"))
     call(second, kw, tmp_path / "out3")
