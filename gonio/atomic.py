@@ -598,14 +598,17 @@ def active_stage(out: str | Path) -> Path | None:
 def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
                source_sha256: str | None = None, what: str = "--out",
                extra: dict | None = None,
-               before_swap: Callable[[Path], None] | None = None) -> Iterator[Path]:
+               before_swap: Callable[[Path], None] | None = None,
+               writes: Iterable[str] = ()) -> Iterator[Path]:
     """Stage one run's whole output set and swap it into ``out`` when all parts are written.
 
     Refused before any work: an empty name, a place that is not a folder, a folder
     holding one of ``inputs``, gonio's files changed since gonio wrote them, and an
     existing readings/stream file — the last two unless ``force``. Files gonio did
     not write (and inputs inside ``out``) are kept in the new set, linked unchanged;
-    a run that would write one of their names is refused at the swap. Another run into the same folder is refused while
+    a run that would write one of their names is refused at the swap, or before any work
+    where the name is one of ``writes`` (the names the run writes whatever happens: a
+    simulation's readings.csv). Another run into the same folder is refused while
     this one holds the lock. ``before_swap(stage)``: called with the finished set (its
     manifest written) just before the swap, to accept it (``calibrate --record``: the
     records take it first); whatever it raises refuses the set. On any exception (or
@@ -627,9 +630,13 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
         _ACTIVE[key] = stage
         carried = carried_inputs(out, inputs)
         foreign = foreign_files(out, inputs, what)
-        yield stage
         kept = [(rel, src, "its input") for rel, src in carried.items()] + \
             [(rel, out / rel, "a file gonio did not write") for rel in foreign]
+        for rel, _src, kind in kept:                  # known now: refused before the work
+            if rel in set(writes):
+                raise GonioError(f"the run would replace {kind}, {rel}; move it or choose "
+                                 f"another {what}", file=out)
+        yield stage
         for rel, src, kind in kept:                   # inputs and the user's files stay
             dst = stage / rel
             if os.path.lexists(dst):

@@ -264,7 +264,8 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
     bench_cfg = load_bench(bench)
     inputs = [x for x in (*inputs, bench, protocol)
               if isinstance(x, (str, Path)) and Path(x).exists()]
-    with output_set(out, inputs=inputs, force=force) as stage:
+    with output_set(out, inputs=inputs, force=force,
+                    writes=("readings.csv", "truth.json")) as stage:
         say("demo: simulating the session on the virtual bench")
         session = run_session(proto, bench_cfg, seed=seed)
         session = _with_static_record_file(session, stage)

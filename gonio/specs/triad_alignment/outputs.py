@@ -60,7 +60,8 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
     # can be computed again from its files (gonio db import)
     extra = {"calibrate_options": {"monte_carlo_trials": int(monte_carlo_trials)}} \
         if monte_carlo_trials else None
-    with output_set(out, inputs=inputs, force=force, extra=extra) as stage:
+    with output_set(out, inputs=inputs, force=force, extra=extra,
+                    writes=("readings.csv", "truth.json")) as stage:
         sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
         result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)
