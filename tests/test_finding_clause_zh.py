@@ -19,3 +19,8 @@ def test_the_clause_goes_through_the_specifications_phrases():
     # a numbered clause no table knows stays as it is
     assert finding_text({**f, "clause": "5.3.3.1"}, labels("zh"), PHRASES_ZH).startswith(
         "[标记] 5.3.3.1，")
+
+
+def test_the_triad_screenings_own_clause_in_chinese():
+    f = {"action": "set_aside", "clause": "triad screening", "message": "x"}
+    assert finding_text(f, labels("zh"), PHRASES_ZH).startswith("[剔除] 三轴组件数据筛查：")

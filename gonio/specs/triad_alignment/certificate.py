@@ -251,6 +251,7 @@ PHRASES_ZH = (
     (r"§4 eq\. (\S+)", "文章 §4 式 {1}"),
     (r"§4 (M̂⁻¹M − I)", "文章 §4 {1}"),
     (r"thesis eq\. (\S+)", "论文式 {1}"),
+    (r"triad screening", "三轴组件数据筛查"),
     # the screening's findings a certificate shows (gonio.specs.triad_alignment.screen)
     (r"alignment dwell about (\S+) at (\S+) °/s: gyro (\w)'s output moved (\S+) from the "
      r"static median, the opposite sign of the rate \(a sign-flipped rate_dps or up\?\)",
