@@ -632,8 +632,9 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
         foreign = foreign_files(out, inputs, what)
         kept = [(rel, src, "its input") for rel, src in carried.items()] + \
             [(rel, out / rel, "a file gonio did not write") for rel in foreign]
+        writes = set(writes)
         for rel, _src, kind in kept:                  # known now: refused before the work
-            if rel in set(writes):
+            if rel in writes:
                 raise GonioError(f"the run would replace {kind}, {rel}; move it or choose "
                                  f"another {what}", file=out)
         yield stage

@@ -98,7 +98,7 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
         raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
                          key="--spec")
     opts = refuse_options(spec, options, spec.simulate_options, "simulate")
-    with output_set(out, inputs=inputs, force=force):
+    with output_set(out, inputs=inputs, force=force, writes=spec.simulated_files):
         return spec.simulate(Path(out), protocol=protocol or spec.default_protocol,
                              bench=bench or spec.default_bench, seed=seed, **opts)
 
@@ -289,7 +289,7 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
         raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
                          key="--spec")
     say = on_stage or (lambda message: None)
-    with output_set(out, inputs=ins, force=force) as stage:
+    with output_set(out, inputs=ins, force=force, writes=spec.simulated_files) as stage:
         say("demo: simulating on the virtual bench")
         sim = spec.simulate(Path(out), protocol=spec.default_protocol,
                             bench=bench or spec.default_bench, seed=seed)

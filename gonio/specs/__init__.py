@@ -334,6 +334,12 @@ class Specification:
         The D-SI form (``"\\ppm"``, ``"\\micro\\volt"``) of every unit its items state
         that gonio's DCC writers do not know (``"ppm"``); checked when the specification loads
         (a D-SI string is ``\\unit`` tokens, optionally with prefixes and ``\\tothe{n}``).
+    simulated_files : tuple of str
+        The names of the files its ``simulate`` writes into the output folder whatever
+        happens (``("readings.csv", "truth.json")``): ``gonio simulate`` and ``gonio demo``
+        refuse a folder holding a laboratory's own file of such a name before the virtual
+        bench runs (:func:`gonio.atomic.output_set`'s ``writes``), not after the whole run
+        at the swap. Empty: refused at the swap only.
     recalibration_interval_months : int or None
         The recalibration interval the specification's document itself recommends (the
         records' proposal shows it beside the one computed from the history); None: the
@@ -381,6 +387,7 @@ class Specification:
     magnitude_extremes: tuple[str, ...] = ()
     dcc_units: dict[str, str] = field(default_factory=dict)
     recalibration_interval_months: int | None = None
+    simulated_files: tuple[str, ...] = ()
 
     def __post_init__(self):
         if not isinstance(self.key, str) or not _KEY.fullmatch(self.key):
@@ -408,7 +415,7 @@ class Specification:
         for name in ("simulate_options", "calibrate_options", "budget_options",
                      "serve_options"):
             _set_strings(self, where, name, frozenset)
-        for name in ("clauses", "item_keys", "magnitude_extremes"):
+        for name in ("clauses", "item_keys", "magnitude_extremes", "simulated_files"):
             _set_strings(self, where, name, tuple)
         unknown = [k for k in self.magnitude_extremes if not self.knows_item(k)]
         if unknown:

@@ -37,6 +37,7 @@ def rate_specification(package: str, **fields):
         run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", run),
         truth=lazy(f"{package}.truth:truth"), coverage=coverage,
         outputs=ITEM_RENDERER, default_bench="mems-adxrs610",
+        simulated_files=("readings.csv", "truth.json"),
         certificate_content=f"{package}.certificate",
         readings_columns=lazy("gonio.formats.rate_readings:read_columns"),
         measured_conditions=fields.pop("measured_conditions", lazy(

@@ -41,6 +41,7 @@ SPEC = Specification(
     readings_columns=lazy("gonio.specs.ogam_draft.readings:read_columns"),
     named_inputs=lazy("gonio.specs.ogam_draft.static_record:named_inputs"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
+    simulated_files=("readings.csv", "truth.json"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),
     acquire=lazy("gonio.specs.ogam_draft.acquisition:acquire_programme"),

@@ -39,6 +39,7 @@ SPEC = Specification(
     calibrate=lazy("gonio.specs.triad_alignment.calibration:calibrate"),
     screen=lazy("gonio.specs.triad_alignment.calibration:screen_files"),
     simulate=_simulate,
+    simulated_files=("readings.csv", "truth.json"),
     truth=lazy("gonio.specs.triad_alignment.truth:truth"),
     budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
