@@ -26,6 +26,8 @@ Monte Carlo (:mod:`uncertainty.montecarlo`)
     :func:`adaptive_monte_carlo`      adaptive number of trials (JCGM 101 7.9)
     :func:`coverage_interval`         symmetric (7.7) or shortest (7.8) interval
     :func:`numerical_tolerance`       δ from ndig digits (JCGM 101 7.9.2)
+    :func:`quantile_numerical_u`      standard uncertainty of a Monte Carlo's quantiles from its
+                                      finite number of draws (JCGM 101 7.9)
     :func:`validate_gum`              GUM vs MC, d_low, d_high ≤ δ (JCGM 101 8)
 
 Coverage factor from the combined distribution (:mod:`uncertainty.combined`)
@@ -53,7 +55,7 @@ from uncertainty.combined import (combined_coverage_factor, needs_combined_k,
 from uncertainty.distributions import DISTRIBUTIONS, distribution
 from uncertainty.montecarlo import (MonteCarloResult, ValidationResult, adaptive_monte_carlo,
                                     coverage_interval, monte_carlo, numerical_tolerance,
-                                    sample_inputs, validate_gum)
+                                    quantile_numerical_u, sample_inputs, validate_gum)
 from uncertainty.propagation import (Contribution, GumResult, coverage_factor,
                                      combined_uncertainty, compile_model, propagate,
                                      sensitivity_coefficients, welch_satterthwaite)
@@ -68,7 +70,7 @@ __all__ = [
     "Contribution", "GumResult", "propagate", "sensitivity_coefficients", "combined_uncertainty",
     "welch_satterthwaite", "coverage_factor", "compile_model",
     "MonteCarloResult", "ValidationResult", "monte_carlo", "adaptive_monte_carlo",
-    "coverage_interval", "numerical_tolerance", "validate_gum", "sample_inputs",
+    "coverage_interval", "numerical_tolerance", "quantile_numerical_u", "validate_gum", "sample_inputs",
     "combined_coverage_factor", "needs_combined_k", "non_normal_share",
     "COLUMNS", "budget_table", "render_text", "render_markdown", "render_html",
 ]

@@ -142,6 +142,29 @@ def numerical_tolerance(u: float, ndig: int = 2) -> float:
     return 0.5 * 10.0 ** l
 
 
+def quantile_numerical_u(draws, probs) -> np.ndarray:
+    """The standard uncertainty, from the finite number M of ``draws``, of their empirical
+    quantiles at ``probs`` (JCGM 101 7.9: the numerical precision of a Monte Carlo's
+    coverage interval ends): half the distance between the quantiles at p ± √(p(1 − p)/M),
+    the binomial standard deviation of the share of draws below the p-quantile carried
+    through the draws' own distribution (distribution-free; for large M it is
+    √(p(1 − p)/M)/f(y_p), f the density at the quantile). The estimate scatters itself:
+    about 40 % at M = 400 and p = 2.5 %.
+
+    >>> rng = np.random.default_rng(1)
+    >>> s = np.mean([quantile_numerical_u(rng.normal(size=400), [0.025, 0.975])
+    ...              for _ in range(400)], axis=0)
+    >>> [round(float(x), 2) for x in s]     # the spread of the quantiles themselves: 0.13
+    [0.13, 0.13]
+    """
+    y = np.asarray(draws, dtype=float)
+    p = np.asarray(probs, dtype=float)
+    d = np.sqrt(p * (1.0 - p) / y.size)
+    lo = np.quantile(y, np.clip(p - d, 0.0, 1.0))
+    hi = np.quantile(y, np.clip(p + d, 0.0, 1.0))
+    return (hi - lo) / 2.0
+
+
 def _summarise(y: np.ndarray, p: float, shortest: bool) -> tuple[float, float, float, float]:
     lo, hi = coverage_interval(y, p, shortest)
     return float(np.mean(y)), float(np.std(y, ddof=1)), lo, hi

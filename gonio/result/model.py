@@ -138,6 +138,10 @@ class Uncertainty:
     #: (``k`` None): there U is the interval's reach above the value and u_c is not U/k
     #: (None: :data:`U_C_OF_INTERVAL`, the stated value's own budget)
     u_c_of: str | None = None
+    #: for an interval taken from a Monte Carlo's draws: the standard uncertainty of its ends
+    #: from the finite number of draws (JCGM 101 7.9), which decides the decimal place the
+    #: ends are stated at (:func:`gonio.result.statement.state_interval`); None: exact
+    interval_numerical_u: float | None = None
 
     @property
     def p(self) -> float | None:
@@ -158,6 +162,8 @@ class Uncertainty:
             out["interval"] = [_f(self.interval[0]), _f(self.interval[1])]
             if self.k is None:      # stated by the interval: say what U and u_c are
                 out["u_c_of"] = self.u_c_of or u_c_of_interval(self.coverage_probability)
+            if self.interval_numerical_u is not None:
+                out["interval_numerical_u"] = _f(self.interval_numerical_u)
         if self.monte_carlo is not None:
             out["monte_carlo"] = json_safe(self.monte_carlo)
         return out
@@ -171,7 +177,8 @@ class Uncertainty:
                    d.get("nu_eff"), d.get("monte_carlo"), d.get("coverage_probability"),
                    d.get("k_source") or "", None if iv is None else (iv[0], iv[1]),
                    d.get("u_c_of") if d.get("u_c_of") != u_c_of_interval(
-                       d.get("coverage_probability")) else None)
+                       d.get("coverage_probability")) else None,
+                   d.get("interval_numerical_u"))
 
 
 @dataclass(frozen=True)

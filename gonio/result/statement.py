@@ -11,6 +11,8 @@ Contents
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
 :func:`state_interval`     value and its coverage interval (a dispersion, range, extreme)
                            → a :class:`Statement` with one interval, no ± U and no k
+:func:`numerical_decimals` the last decimal place a Monte Carlo's finite draws leave
+                           significant (JCGM 101 7.9)
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :func:`below_zero_bound`   a non-negative quantity whose estimate fell below zero: stated by
                            its upper bound alone, with a note (the estimate stays in results.json)
@@ -659,7 +661,8 @@ def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
 
 def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float | None = None,
                    p: float | None = None, unit: str | None = "",
-                   nonnegative: bool = False, chi2: bool = False) -> Statement:
+                   nonnegative: bool = False, chi2: bool = False,
+                   numerical_u: float | None = None) -> Statement:
     """A value stated by its coverage interval [lo, hi] (a dispersion, range or extreme whose
     distribution is not symmetric about the estimate: χ² for a standard deviation, Monte
     Carlo for an extreme): no "± U" and no k, one interval with its probability.
@@ -669,6 +672,16 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     rounded down and the upper end up (never narrower than computed), the value half up at
     the same place. For a non-negative quantity an interval starting at 0 is a one-sided
     upper bound (``upper``).
+
+    ``numerical_u``: for ends taken from a Monte Carlo's draws, the standard uncertainty of
+    the ends from the finite number of draws. The digits stated must be numerically
+    significant (JCGM 101 7.9.2, 7.9.4: the results are stable to the numerical tolerance δ
+    when 2·s ≤ δ, δ half a unit of the last stated digit): the decimal place is moved left
+    until ½·10⁻ᵈᵉᶜ ≥ 2·``numerical_u`` (10⁻ᵈᵉᶜ ≥ 4·``numerical_u``), never right, and at most
+    to the place that leaves one significant digit in that distance (JCGM 101 7.9.2's ndig
+    of 1: the ends rounded outward at a coarser place would widen the interval by more
+    than the draws' scatter). A digit a rerun of the Monte Carlo would change is not
+    printed where one digit can be kept.
 
     Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
     holding the value (except a non-negative quantity's estimate below an interval from 0:
@@ -687,6 +700,12 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     '0 s'
     >>> state_interval(-0.5, (0.0, 2.04), nonnegative=True).text()   # a corrected range < 0
     'upper bound: ≤ 2.1 (interval [0, 2.1]); the estimate fell below zero'
+    >>> state_interval(0.0995, (0.0677, 0.1302), p=0.95, unit="°/s").text()
+    '0.100 °/s; interval [0.067, 0.131] °/s (p = 95 %)'
+    >>> state_interval(0.0995, (0.0677, 0.1302), p=0.95, unit="°/s", numerical_u=0.002).text()
+    '0.10 °/s; interval [0.06, 0.14] °/s (p = 95 %)'
+    >>> state_interval(0.006, (0.0, 0.0191), p=0.95, nonnegative=True, numerical_u=0.004).text()
+    '0.01; upper bound: ≤ 0.02 (interval [0, 0.02], p = 95 %)'
     >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
     Traceback (most recent call last):
     gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
@@ -706,7 +725,11 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
                          "not stated")
     one_sided = nonnegative and lo == 0
     gaps = [g for g in ((hi - value,) if one_sided else (value - lo, hi - value)) if g > 0]
-    dec = decimals_for_sig(min(gaps) if gaps else hi - lo, 2)
+    gap = min(gaps) if gaps else hi - lo
+    dec = decimals_for_sig(gap, 2)
+    if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0:
+        # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
+        dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
     q = Decimal(1).scaleb(-dec)
     with _wide():
         vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
@@ -720,6 +743,22 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
         Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff, chi2), p_text(p), unit_s,
                   upper=ht if one_sided else None, exponent=exponent, decimals=dec,
                   interval=(_scaled(lr, exponent, md), ht)), value, nonnegative)
+
+
+def numerical_decimals(numerical_u: float) -> int:
+    """The rightmost decimal place a Monte Carlo result may be stated at when its standard
+    uncertainty from the finite number of draws is ``numerical_u`` (JCGM 101 7.9.2, 7.9.4:
+    2·s ≤ δ, the numerical tolerance δ half a unit of the last digit): the largest ``dec``
+    with 10⁻ᵈᵉᶜ ≥ 4·``numerical_u``.
+
+    >>> numerical_decimals(0.002), numerical_decimals(0.0025), numerical_decimals(0.00024)
+    (2, 2, 3)
+    >>> numerical_decimals(3.0)
+    -2
+    """
+    with _wide():
+        return -int((Decimal(repr(4.0 * float(numerical_u)))).log10().to_integral_value(
+            rounding=ROUND_CEILING))
 
 
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
@@ -909,7 +948,8 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
                                   nonnegative=True)
         return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
                               p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative,
-                              chi2=_get(unc, "k_source") == K_SOURCE_CHI2)
+                              chi2=_get(unc, "k_source") == K_SOURCE_CHI2,
+                              numerical_u=_get(unc, "interval_numerical_u"))
     return state(_get(item, "value") if measured else None, U if ok else None,
                  k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
                  p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,

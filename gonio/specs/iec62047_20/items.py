@@ -1960,9 +1960,11 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     raw = vals[i] - excess - resid
     lo, hi = power_on_interval(raw, v_star - v_star.mean(), nu)
     value = max(raw, 0.0)
-    # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k
+    # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k,
+    # its ends stated to the digits the replicates' number supports (JCGM 101 7.9)
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
-                k_source=K_SOURCE_POWER_ON, interval=(lo, hi))
+                k_source=K_SOURCE_POWER_ON, interval=(lo, hi),
+                interval_numerical_u=power_on_interval_numerical_u(v_star - v_star.mean(), nu))
     return value, vals, u, m_sel, fit
 
 
@@ -2046,13 +2048,38 @@ def power_on_interval(raw: float, d: np.ndarray, nu: float = math.inf,
     >>> [round(x, 3) for x in power_on_interval(-0.5, d)]
     [0.0, 0.95]
     """
+    q = (1.0 + p) / 2.0
+    q_lo, q_hi = np.quantile(np.asarray(d, float), [1.0 - q, q])
+    f = _power_on_pivot_factor(nu, p)
+    est = max(float(raw), 0.0)
+    return max(est - f * float(q_hi), 0.0), est - f * float(q_lo)
+
+
+def _power_on_pivot_factor(nu: float, p: float) -> float:
+    """f = t_{(1+p)/2}(ν)/z_{(1+p)/2} of :func:`power_on_interval` (1 for ν infinite)."""
     from scipy.stats import norm, t as student_t
 
     q = (1.0 + p) / 2.0
-    f = float(student_t.ppf(q, nu) / norm.ppf(q)) if math.isfinite(nu) else 1.0
-    q_lo, q_hi = np.quantile(np.asarray(d, float), [1.0 - q, q])
-    est = max(float(raw), 0.0)
-    return max(est - f * float(q_hi), 0.0), est - f * float(q_lo)
+    return float(student_t.ppf(q, nu) / norm.ppf(q)) if math.isfinite(nu) else 1.0
+
+
+def power_on_interval_numerical_u(d: np.ndarray, nu: float = math.inf,
+                                  p: float = 0.95) -> float:
+    """The standard uncertainty of :func:`power_on_interval`'s ends from the finite number of
+    replicates (:data:`POWER_ON_MC_TRIALS`): the larger of the two ends' quantile
+    uncertainties (:func:`uncertainty.quantile_numerical_u`), scaled by the same factor f.
+    It decides the decimal place the interval is stated at (JCGM 101 7.9: no digit a rerun
+    of the replicates would change; :func:`gonio.result.statement.state_interval`).
+
+    >>> d = np.linspace(-1.0, 1.0, 401)
+    >>> round(power_on_interval_numerical_u(d), 4)    # √(0.025·0.975/401)/f, density f = ½
+    0.0156
+    """
+    from uncertainty import quantile_numerical_u
+
+    q = (1.0 + p) / 2.0
+    s = quantile_numerical_u(np.asarray(d, float), [1.0 - q, q])
+    return _power_on_pivot_factor(nu, p) * float(np.max(s))
 
 
 POWER_ON_MC_TRIALS = 400
