@@ -48,17 +48,10 @@ def _never(*_a, **_k):
     raise AssertionError("the bench ran before the refusal")
 
 
-@pytest.mark.parametrize("spec", sorted(BENCH_ENTRY))
-def test_demo_refused_before_the_bench_runs(spec, tmp_path, monkeypatch, capsys):
-    module, name = BENCH_ENTRY[spec]
+@pytest.mark.parametrize("command,spec", [(c, s) for c in ("demo", "simulate")
+                                          for s in sorted(BENCH_ENTRY)])
+def test_refused_before_the_bench_runs(command, spec, tmp_path, monkeypatch, capsys):
+    module, name = (BENCH_ENTRY if command == "demo" else SIMULATE_ENTRY)[spec]
     monkeypatch.setattr(importlib.import_module(module), name, _never)
     lab = _lab_folder(tmp_path)
-    _refused(lab, ["demo", "--spec", spec, "--out", str(lab)], capsys)
-
-
-@pytest.mark.parametrize("spec", sorted(SIMULATE_ENTRY))
-def test_simulate_refused_before_the_bench_runs(spec, tmp_path, monkeypatch, capsys):
-    module, name = SIMULATE_ENTRY[spec]
-    monkeypatch.setattr(importlib.import_module(module), name, _never)
-    lab = _lab_folder(tmp_path)
-    _refused(lab, ["simulate", "--spec", spec, "--out", str(lab)], capsys)
+    _refused(lab, [command, "--spec", spec, "--out", str(lab)], capsys)
