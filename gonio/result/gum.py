@@ -116,7 +116,7 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
 
 
 
-def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
+def dispersion_uncertainty(s: float, u: Uncertainty, p: float = 0.95) -> Uncertainty:
     """A dispersion ``s`` (a standard deviation, a root mean square of noise) whose standard
     uncertainty comes from its own budget ``u`` (JJF 1535 7.2.10's bias stability: a mean of
     records' block-mean spreads with their effective ν; IEC 62047-20 5.4.5.1's in-band and
@@ -129,6 +129,8 @@ def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
     to the upper limit (the guard band of the decision,
     :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution with that
     ν). The budget's rows and u_c are kept. ``s`` not above 0 or no u_c: ``u`` as it is.
+    ``p``: the interval's probability, where a certificate states another p for every item
+    (the triad's 95.45 %): [0, s·√(ν/χ²_{1−p},ν)].
 
     >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
     >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
@@ -139,8 +141,8 @@ def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
     if not (s > 0 and u.u_c > 0):
         return u
     nu = 0.5 * (s / u.u_c) ** 2
-    U = std_upper_half_width(s, chi2_nu(nu))
-    return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
+    U = std_upper_half_width(s, chi2_nu(nu), p)
+    return Uncertainty(u.components, u.u_c, U, None, nu, None, p, "chi-square",
                        interval=(0.0, s + U))
 
 

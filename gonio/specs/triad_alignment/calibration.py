@@ -86,7 +86,8 @@ READINGS_TAKEN = (
     "values are K, b and ARW at the programme's set points and supply levels, the order "
     "choice inside U; the coefficients are information.",
     "ARW at the set points: a dispersion (the static dwells' sample standard deviations), "
-    "stated by its one-sided χ² interval alone, [0, N·√(ν/χ²_0.05,ν)], p = 95 %, no k: ν from "
+    "stated by its one-sided χ² interval alone, [0, N·√(ν/χ²_(1−p),ν)], p = " + p_text(COVERAGE)
+    + " % as every item, no k: ν from "
     "the χ² of the dwells under white rate noise (ν = n − 1 each) through the fit, with the "
     "model order and the temperature reading, ν = ½(N/u_c)²; the bias instability's lift of "
     "the dwells' variance (B̂ from the static record's Allan floor) corrected by half its "
@@ -607,9 +608,9 @@ def _arw_budget(key: str, fit, pt: dict, flicker: tuple | None = None
                 ) -> tuple[float, Uncertainty, dict]:
     """A certified ARW(ϑ) value (a dispersion: the white-noise density read from the static
     dwells' sample standard deviations) and its one statement: the value corrected for the
-    bias instability's lift, and its one-sided χ² 95 % interval alone
-    (:func:`gonio.result.gum.dispersion_uncertainty`: [0, N·√(ν/χ²_0.05,ν)], ν = ½(N/u_c)²;
-    no k, no "± U").
+    bias instability's lift, and its one-sided χ² interval alone at the certificate's p
+    (:data:`COVERAGE`, as every triad item; :func:`gonio.result.gum.dispersion_uncertainty`:
+    [0, N·√(ν/χ²_{1−p},ν)], ν = ½(N/u_c)²; no k, no "± U").
 
     Budget: the χ² of the dwells under the white rate noise the procedure assumes
     (:meth:`~gonio.specs.triad_alignment.thermal_model.ChannelModel.arw_chi2`, ``u_chi2``),
@@ -655,8 +656,10 @@ def _arw_budget(key: str, fit, pt: dict, flicker: tuple | None = None
     comp = [{"symbol": sym, "type": typ, "u": float(u), "c": 1.0, "contribution": float(u),
              "dof": float(nu), "source": src} for sym, typ, u, nu, src in lines]
     u_c = math.sqrt(sum(c["u"] ** 2 for c in comp))
+    # the certificate's one p (COVERAGE) for the χ² interval too
     return value, dispersion_uncertainty(value, Uncertainty(comp, u_c, None, None, None, None,
-                                                            0.95, "chi-square")), details
+                                                            COVERAGE, "chi-square"),
+                                         COVERAGE), details
 
 
 def thermal_flicker(al: AlignmentResult | None, readings: TriadReadings,

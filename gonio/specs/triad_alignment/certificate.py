@@ -100,14 +100,14 @@ TEXT = {
                    "at least p = " + P_STATED + " % at every table error within the bounds; no "
                    "coverage factor of the whole. The other items (b, b(ϑ, U)) are value ± U, "
                    "U = k·u, each with its own k; ARW(ϑ), a dispersion, by its one-sided χ² "
-                   "interval [0, upper] alone (p = 95 %, no k). Conformity is decided on these "
+                   "interval [0, upper] alone (p = " + P_STATED + " %, no k). Conformity is decided on these "
                    "statements.",
                    "每项一个表述。受速率转台影响的项（M、S、L 及 K(ϑ, U)）以界限条件区间表述：转台误差"
                    "取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
                    "±{bound}°——按最不利组合线性合成为 a，加上其他分量的 k·u：U = a + k·u；在界限内任一"
                    "转台误差下包含概率不低于 p = " + P_STATED + " %；整体无包含因子。其余各项（b、b(ϑ, U)）"
                    "为 值 ± U，U = k·u，各有其 k；ARW(ϑ) 为离散度，仅以单侧 χ² 区间 [0, 上限] 表述"
-                   "（p = 95 %，无 k）。符合性按这些表述判定。"),
+                   "（p = " + P_STATED + " %，无 k）。符合性按这些表述判定。"),
     "nu": ("ν", "ν"),
     "arw_upper": ("upper bound", "上限"),
     "arw_budget": ("ARW: u_c of its budget (the dwells' χ², the lift correction, the order, "
@@ -145,7 +145,7 @@ TEXT = {
                     "per cell, coverage probability p = " + P_STATED + " %: K the bound-condition "
                     "interval (U = a + k·u, a = |K| × the rate error at its bound; k of the "
                     "other lines in its k column), b value ± U with its own k = t(ν_eff); ARW, a "
-                    "dispersion, by its one-sided χ² upper bound alone, p = 95 % (ν from the "
+                    "dispersion, by its one-sided χ² upper bound alone, p = " + P_STATED + " % (ν from the "
                     "dwells' χ² under white rate noise, the order and the temperature reading, "
                     "ν = ½(N/u_c)²; corrected for half the bias instability's full-band lift, "
                     "the other half in u_c), no k. U includes the fit, the "
@@ -156,7 +156,7 @@ TEXT = {
                     "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
                     "每格一个表述，包含概率 p = " + P_STATED + " %：K 为界限条件区间（U = a + k·u，a = |K| × 速率误差界限；"
                     "k 列为其他分量的 k），b 为 值 ± U，其 k = t(ν_eff)；ARW 为离散度，仅以单侧 χ² 上限表述，"
-                    "p = 95 %（ν 由白噪声下各段的 χ²、模型阶次及温度读数给出，ν = ½(N/u_c)²；按零偏不稳定性"
+                    "p = " + P_STATED + " %（ν 由白噪声下各段的 χ²、模型阶次及温度读数给出，ν = ½(N/u_c)²；按零偏不稳定性"
                     "全频带抬升的一半修正，另一半计入 u_c），无 k。U 含拟合、模型阶次（各候选阶次"
                     "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
     "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
@@ -208,8 +208,8 @@ READINGS_TAKEN_ZH = (
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
     "（论文 §6.1）；校准值为各温度设定点与电源电压下的 K、b 及 ARW，阶次选择的影响计入 U，"
     "多项式系数仅供参考。",
-    "各设定点的 ARW：为离散度（静态测量段的样本标准差），仅以单侧 χ² 区间 [0, N·√(ν/χ²_0.05,ν)] 表述，"
-    "p = 95 %，无 k：ν 由白噪声（角速率白噪声，各段 ν = n − 1）下各段的 χ² 经拟合传递，并计入模型阶次"
+    "各设定点的 ARW：为离散度（静态测量段的样本标准差），仅以单侧 χ² 区间 [0, N·√(ν/χ²_(1−p),ν)] 表述，"
+    "p = " + P_STATED + " %（与各项相同），无 k：ν 由白噪声（角速率白噪声，各段 ν = n − 1）下各段的 χ² 经拟合传递，并计入模型阶次"
     "与温度读数分量，ν = ½(N/u_c)²；零偏不稳定性对各段方差的抬升（B̂ 取自静态数据 Allan 偏差的平底）"
     "按其全频带闪烁噪声值的一半修正，另一半计入 u_c。",
 )

@@ -305,7 +305,7 @@ def _nu_rule(res: dict, key: str) -> str:
 
 def _arw_cells(res: dict, key: str, lang: str) -> list:
     """An ARW item's cells by the one statement rule (:func:`item_nums`): its value, its one
-    statement ("≤ upper (p = 95 %)": the one-sided χ² interval [0, upper]) and the ν of that
+    statement ("≤ upper (p = 95.45 %)": the one-sided χ² interval [0, upper] at the certificate's p) and the ν of that
     χ²; an item stated by U (a result written before ARW was a dispersion) gives
     "value ± U (k = …)" and its ν_eff. Its u_c is in the budget table below it."""
     it = res["items"][key]
