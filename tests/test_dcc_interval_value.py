@@ -1,12 +1,13 @@
 """An item stated only by its coverage interval: the DCC writes the interval and, as its
 si:value, the value the certificate's statement rounds (sign and digits). A non-negative
 quantity whose bias-corrected estimate fell below zero is stated on the certificate by its
-upper bound alone ("≤ upper (interval [0, upper])"): the DCC writes that bound as its
-si:value (the one number the certificate prints: never the negative estimate, which lies
-outside its own interval and no page prints), and its description says that the statement
-is the bound. Checked through the writers every DCC uses (the rate and per-item DCCs'
-:func:`gonio.report.stated.item_nums` → :func:`gonio.report.dcc.quantity`), on numbers
-written here, with the interval's ends worked out independently of the statement rule."""
+upper bound alone ("≤ upper (interval [0, upper])"): every DCC (the optical draft's, the rate
+and per-item DCCs) writes its interval [0, upper] alone, with no si:value — neither the bound
+nor the negative estimate is a measured value — and the statement with its note as the
+description. Checked through the writer every DCC uses
+(:func:`gonio.report.dcc.below_zero_quantity`, from :func:`gonio.report.stated.item_nums`),
+on numbers written here, with the interval's ends worked out independently of the
+statement rule."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from decimal import ROUND_CEILING, Decimal
 import pytest
 from lxml import etree
 
-from gonio.report.dcc import DCC_NS, SI_NS, element, quantity
+from gonio.report.dcc import DCC_NS, SI_NS, below_zero_quantity, element, quantity
 from gonio.report.stated import item_nums
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
@@ -36,29 +37,60 @@ def _item(value, U, interval=None):
     (-0.5, 2.54, (0.0, 2.04)),
     (-3.0, 4.0, None),          # a ± U item below zero: [0, value + U] by the rule
 ])
-def test_dcc_value_of_an_estimate_below_zero_is_its_printed_bound(value, U, interval):
+def test_dcc_of_an_estimate_below_zero_is_its_interval_alone(value, U, interval):
     it = _item(value, U, interval)
     n = item_nums(it, "items.x")
     st = n["statement"]
     assert st.below_zero and n["interval"] is not None
     root = element(etree.Element("root", nsmap={"dcc": DCC_NS, "si": SI_NS}), "dcc:data")
-    quantity(root, "x", n["stated_value"], "%", interval=n["interval"]["ends"],
-             u_std=n["interval"]["u"], p=0.95, description=st.text())
-    v = float(root.find(".//si:real/si:value", NS).text)
-    lo = float(root.find(".//si:intervalMin", NS).text)
-    hi = float(root.find(".//si:intervalMax", NS).text)
+    below_zero_quantity(root, "x", n["interval"]["ends"], "\\percent", 0.95,
+                        description=st.text())
+    # no value at all: neither the bound nor the negative estimate is one
+    assert root.find(".//si:real", NS) is None and root.find(".//si:value", NS) is None
+    labels = root.find(".//si:realListXMLList/si:labelXMLList", NS).text
+    lo, hi = (float(x) for x in
+              root.find(".//si:realListXMLList/si:valueXMLList", NS).text.split())
+    assert labels == "intervalMin intervalMax"
     # the interval as the certificate states it: [0, upper], upper = the interval's end
     # rounded up at two significant digits of its distance from 0
     end = interval[1] if interval else value + U
     q = Decimal(1).scaleb(-(2 - 1 - Decimal(repr(end)).adjusted()))
     assert lo == 0.0 and hi == float(Decimal(repr(end)).quantize(q, rounding=ROUND_CEILING))
-    # si:value: that bound, as printed (never the negative estimate outside [0, upper])
-    text = root.find(".//si:real/si:value", NS).text
-    assert not text.startswith("-") and v == hi and v > value
-    assert math.isclose(v, float(Decimal(repr(end)).quantize(q, rounding=ROUND_CEILING)),
-                        rel_tol=1e-12)
-    assert "below zero" in root.find(".//dcc:description/dcc:content", NS).text
-    assert st.upper_text in root.find(".//dcc:description/dcc:content", NS).text
+    assert math.isclose(hi, float(st.upper_text), rel_tol=1e-12)
+    name = root.find(".//dcc:quantity/dcc:name/dcc:content", NS).text
+    assert "upper bound alone" in name and name.endswith("p = 95 %")
+    desc = root.find(".//dcc:description/dcc:content", NS).text
+    assert "below zero" in desc and st.upper_text in desc
+
+
+@pytest.mark.parametrize("spec", ["jjf1535-2015", "iec62047-20"])
+def test_rate_dcc_states_a_below_zero_item_by_its_interval_alone(spec, shared_demo):
+    """Through the rate DCC writer, on a demo's results.json with one non-negative item
+    stated by its interval moved below zero (as a bias correction can take it): that item's
+    dcc:result has no si:value and its interval [0, upper] as the certificate states it."""
+    import json
+
+    from gonio.report.rate_dcc import rate_dcc_tree
+    from gonio.result.model import Result
+
+    d = json.loads((shared_demo(spec) / "results.json").read_text(encoding="utf-8"))
+    key = next(k for k, it in sorted(d["items"].items())
+               if it["measured"] and it.get("nonnegative") and it["uncertainty"]
+               and it["uncertainty"].get("k") is None
+               and (it["uncertainty"].get("interval") or [None])[0] == 0.0)
+    it = d["items"][key]
+    hi = it["uncertainty"]["interval"][1]
+    it["value"] = -0.2 * hi
+    st = item_nums(it, f"items.{key}")["statement"]
+    assert st.below_zero
+    root = rate_dcc_tree(Result.from_json(d), cert_id="T-1")
+    res = root.find(f".//dcc:result[@id='result-{key}']", NS)
+    assert res.find(".//si:real", NS) is None and res.find(".//si:value", NS) is None, key
+    lo, up = res.find(".//si:realListXMLList/si:valueXMLList", NS).text.split()
+    assert float(lo) == 0.0 and float(up) >= hi and up == st.upper_text
+    assert "upper bound alone" in res.find(".//dcc:quantity/dcc:name/dcc:content", NS).text
+    # every other measured item keeps its value
+    assert len(root.findall(".//si:real/si:value", NS)) >= 10
 
 
 def test_a_value_inside_its_interval_is_written_as_stated():

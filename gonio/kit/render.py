@@ -35,6 +35,8 @@ The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data
                                 :func:`list_quantity`,
                                 :func:`not_measured_quantity`, :func:`interval_quantity`
                                 (an interval without a standard uncertainty),
+                                :func:`below_zero_quantity` (an item stated by its upper
+                                bound alone: [0, upper], no si:value),
                                 :func:`unit_dsi`, :func:`tree_bytes`,
                                 :func:`bilingual`, :func:`label_translator`,
                                 :data:`DCC_CONFORMITY`
@@ -46,7 +48,7 @@ not, so a specification's calibrating modules stay light.
 
 from __future__ import annotations
 
-from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
+from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, below_zero_quantity, bilingual,
                               element, environment_conditions, influence_conditions,
                               interval_quantity, label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
@@ -74,7 +76,7 @@ __all__ = [
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
     "no_probability_note", "measured_note", "interval_band_note", "declaration_parts",
-    "interval_legend", "interval_quantity",
+    "interval_legend", "interval_quantity", "below_zero_quantity",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",

@@ -172,6 +172,22 @@ BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the bounded er
                   "standard uncertainty of the item is certified")
 
 
+#: The name of a non-negative item whose bias-corrected estimate fell below zero, written as
+#: its interval [0, upper bound] alone (:func:`below_zero_quantity`).
+BELOW_ZERO_INTERVAL = ("stated by its upper bound alone, the interval [0, upper bound]: the "
+                       "bias-corrected estimate fell below zero; no value is stated")
+
+
+def below_zero_quantity(d, name: str, ends, dsi: str, p: float,
+                        description: str | None = None) -> None:
+    """A non-negative item whose estimate fell below zero, as its certificate states it: by its
+    upper bound alone, so the DCC writes the interval [0, upper] (:func:`interval_quantity`,
+    :data:`BELOW_ZERO_INTERVAL` in the name) and no si:value — neither the bound nor the
+    negative estimate is a measured value, and a consumer would read an si:value as one.
+    ``description``: the certificate's statement with its note."""
+    interval_quantity(d, name, ends, dsi, p, BELOW_ZERO_INTERVAL, description=description)
+
+
 def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str,
                       description: str | None = None) -> None:
     """An interval stated without a standard uncertainty (an item whose certificate states

@@ -743,7 +743,7 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      "{1}：最大真值 |E_i| 的包含区间，各点延伸 k·u + b：u 为转台以外各分量的合成，b 为该点"
      "转台误差的界；不给出 E 的标准不确定度；p = {2} %"),
     # a non-negative item whose estimate fell below zero, stated by its interval [0, upper]
-    # alone (the optical DCC's BELOW_ZERO_INTERVAL)
+    # alone (every DCC's BELOW_ZERO_INTERVAL, gonio.report.dcc)
     (r"(.+): stated by its upper bound alone, the interval \[0, upper bound\]: the "
      r"bias-corrected estimate fell below zero; no value is stated; p = (\S+) %",
      "{1}：仅以上限表述，区间 [0, 上限]：偏差修正后的估计值低于零；不给出量值；p = {2} %"),

@@ -27,7 +27,8 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, conformity_statements,
+from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, below_zero_quantity,
+                              conformity_statements,
                               interval_quantity, stated_p,
                               element, environment_conditions, influence_conditions,
                               measurement_result, new_document, not_measured_quantity,
@@ -127,9 +128,13 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
                   "p": float(p)}                       # stated by its coverage interval
         st = n.get("statement")
         dsi = compose_dsi(it["unit"], spec.dcc_units)
+        if st is not None and st.below_zero and p is not None:
+            # its upper bound alone: the interval [0, upper], no si:value
+            below_zero_quantity(d, name, n["interval"]["ends"], dsi, float(p),
+                                description=st.text())
+            continue
         quantity(d, name, n["stated_value"], "", dsi=dsi,
-                 ref_type="basic_measuredValue",
-                 description=st.text() if st is not None and st.below_zero else None, **kw)
+                 ref_type="basic_measuredValue", **kw)
         if bound is not None:
             interval_quantity(d, name, bound, dsi, float(p), BOUND_INTERVAL)
     for mname, keys in content_field(data, "MATRICES"):

@@ -45,7 +45,8 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, conformity_statements,
+from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, below_zero_quantity,
+                              conformity_statements,
                               element, environment_conditions, influence_conditions,
                               interval_quantity, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
@@ -198,13 +199,15 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                 kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                       "p": float(item_p(it))}         # stated by its coverage interval
             conv = factor != 1.0
+            st = n["statement"]
+            if st.below_zero:          # its upper bound alone: [0, upper], no si:value
+                below_zero_quantity(data, name, n["interval"]["ends"], dsi, float(item_p(it)),
+                                    description=_converted(st, it, key, factor))
+                continue
             quantity(data, name, n["stated_value"], "", dsi=dsi,
                      note=f" factor={factor!r}" if conv else "",
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
-                     description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
-                                  f"results.json, written per m s⁻² (g_n = "
-                                  f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv
-                     else _below_zero_text(n), **kw)
+                     description=_converted(st, it, key, factor) if conv else None, **kw)
             if bound is not None:
                 interval_quantity(data, name, bound, dsi, float(item_p(it)), BOUND_INTERVAL)
     conformity_statements(sts, items, lambda k: items[k]["title"],
@@ -214,12 +217,14 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
     return root
 
 
-def _below_zero_text(n: dict) -> str | None:
-    """The certificate's statement of a non-negative item whose estimate fell below zero
-    (its upper bound alone and the note), the description beside the DCC's value, which
-    is that bound (``item_nums``' ``stated_value``: the one number the certificate prints)."""
-    st = n.get("statement")
-    return st.text() if st is not None and st.below_zero else None
+def _converted(st, it: dict, key: str, factor: float) -> str:
+    """The description of an item's DCC quantity: its statement (``st``, in the DCC's unit),
+    and where the DCC writes it in another unit than the certificate (a per-g item per
+    m s⁻², ``factor`` ≠ 1) the certificate's statement in results.json's unit."""
+    if factor == 1.0:
+        return st.text()
+    return (f"{item_nums(it, f'items.{key}')['statement'].text()} in results.json, written "
+            f"per m s⁻² (g_n = {STANDARD_GRAVITY_M_S2} m s⁻²)")
 
 
 def item_p(it: dict) -> float | None:

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from gonio.atomic import write_bytes
-from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
+from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data, below_zero_quantity,
                               conformity_texts, declaration_parts, display, element,
                               environment_conditions, influence_conditions, interval_quantity,
                               labels, list_quantity,
@@ -156,9 +156,9 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 quantity(data, "position of the extreme", s["position"], "deg")
         elif s["below_zero"]:     # its interval [0, bound] alone, no si:value, and why
             note = (LABELS["below_zero"]["en"], _range_table_text(res, name, L))
-            interval_quantity(data, L[name], s["interval"]["statement"].interval_ends,
-                              unit_dsi(item["unit"]), float(unc["p"]), BELOW_ZERO_INTERVAL,
-                              description="; ".join(d for d in note if d))
+            below_zero_quantity(data, L[name], s["interval"]["statement"].interval_ends,
+                                unit_dsi(item["unit"]), float(unc["p"]),
+                                description="; ".join(d for d in note if d))
         else:
             desc = ([_k_tilt_text(res, L), _k_table_text(res, L)] if name == "scale_factor"
                     else [_range_table_text(res, name, L)])
@@ -179,8 +179,6 @@ E_BOUND_INTERVAL = ("the coverage interval of the largest true |E_i|, each point
 
 #: What the interval of a non-negative item whose bias-corrected estimate fell below zero is
 #: (its DCC quantity's name; the certificate states the item by its upper bound alone)
-BELOW_ZERO_INTERVAL = ("stated by its upper bound alone, the interval [0, upper bound]: the "
-                       "bias-corrected estimate fell below zero; no value is stated")
 
 
 #: The DCC's own words around the certificate's K and E notes, in Chinese (a zh DCC writes
