@@ -283,3 +283,37 @@ def test_iec_noise_items_hold_at_the_static_record_s_temperature(tmp_path_factor
     zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
     assert "噪声项" in zh and "而非 T_BASE" in zh
     assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"temperature_c"}], zh
+
+
+def test_iec_without_its_bias_temperature_coefficient_names_the_bias_items(tmp_path,
+                                                                           tmp_path_factory):
+    """The readings less their 5.3.3.6 rows: the bias (5.3.3.1) and 5.3.3.2 lose the gyro's
+    temperature error at T_BASE (e_TU 0 in their bound condition), and one flagged finding
+    names both, on the certificate, in summary.txt and in Chinese without an English word;
+    the whole readings give no such finding and a non-zero e_TU."""
+    from gonio.report.i18n import finding_text, labels
+    from gonio.specs.iec62047_20.certificate import PHRASES_ZH
+    from tests.test_zh_certificates import WHITELIST, WORD
+
+    whole = _run(tmp_path_factory, "iec62047-20")["res"]
+    assert not [f for f in whole["findings"] if f["code"] == "bias-temperature-unbounded"]
+    for key in ("bias", "initial_bias_variation"):
+        assert whole["items"][key]["details"]["bound_condition"]["a_lines"]["e_TU"] > 0
+    c = calibrated(tmp_path, "iec62047-20", drop_test="bias_temperature")
+    res = c["res"]
+    assert not res["items"].get("bias_temperature_coefficient", {"measured": False})["measured"]
+    for key in ("bias", "initial_bias_variation"):
+        assert res["items"][key]["measured"]
+        assert res["items"][key]["details"]["bound_condition"]["a_lines"].get("e_TU", 0.0) == 0.0
+    found = [f for f in res["findings"] if f["code"] == "bias-temperature-unbounded"]
+    assert len(found) == 1 and found[0]["action"] == "flagged", res["findings"]
+    msg = found[0]["message"]
+    named = set(re.search(r"the intervals of (.+?) are stated without", msg).group(1).split(", "))
+    assert named == {"5.3.3.1", "5.3.3.2"} and "5.3.3.6" in msg
+    assert f"{_chamber_bound_c(c['text']):g} °C" in msg
+    assert "temperature effect on the bias is not bounded" in _plain(c["html"])
+    assert "temperature effect on the bias is not bounded" in c["summary"]
+    zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
+    assert "温箱温度对零偏的影响未给出界限" in zh and "5.3.3.2" in zh
+    # the test's name in the readings (its reason quotes it) is no English word
+    assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"bias_temperature"}], zh

@@ -117,6 +117,9 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     # a_BASE without 5.1.3.4's T_c,SF: its chamber-deviation term is not bounded, said so
     unbounded = _items.chamber_effect_finding(items, _items.gyro_temperature_bound_c(ctx))
     findings = list(findings) + ([unbounded] if unbounded is not None else [])
+    # the bias without 5.3.3.6's β: its e_TU is 0, said so
+    bias_t = _items.bias_temperature_finding(items, _items.gyro_temperature_bound_c(ctx))
+    findings = findings + ([bias_t] if bias_t is not None else [])
     # the noise items hold at the static record's temperature: said so
     noise_t = _items.noise_temperature_finding(
         items, _items.static_record_temperature_c(ctx.df), _items.gyro_temperature_bound_c(ctx))

@@ -166,6 +166,16 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "未计入该影响的分量（陀螺在 T_BASE 处的温度误差 ± {3} °C：温箱偏差及其在容积内的位置；"
      "各点之间的温箱温度波动），除以 a_BASE 的各项经其不确定度亦不含该分量——"
      "请测量 5.1.3.4 或给出该系数的界限"),
+    # the bias-temperature-unbounded finding (gonio.specs.iec62047_20.items.bias_temperature_finding)
+    (r"the chamber's temperature effect on the bias is not bounded: the bias temperature "
+     r"coefficient of 5\.3\.3\.6 is not measured \((.+)\), so the intervals of (.+?) are "
+     r"stated without a term for it \(the gyro's temperature error at T_BASE, ± (\S+) °C: the "
+     r"chamber's deviation and its place in the volume\) — measure 5\.3\.3\.6 or state the "
+     r"coefficient's bound",
+     "温箱温度对零偏的影响未给出界限：5.3.3.6 的零偏温度系数未测得（{1}），故 {2} 的区间未计入该影响的"
+     "分量（陀螺在 T_BASE 处的温度误差 ± {3} °C：温箱偏差及其在容积内的位置）——请测量 5.3.3.6 "
+     "或给出该系数的界限"),
+    (r"the readings hold no 5\.3\.3\.6 visits", "读数中没有 5.3.3.6 的温度点"),
     # the noise-temperature finding (gonio.specs.iec62047_20.items.noise_temperature_finding)
     (r"the noise items (.+?) hold at the gyro's temperature during the static record "
      r"\((.+?), the readings' temperature_c, with the gyro within ± (\S+) °C of it: the "

@@ -309,6 +309,38 @@ def chamber_effect_finding(items: dict, chamber_bound_c: float):
                    rule="the scale-factor items' chamber term bounded by 5.1.3.4's T_c,SF")
 
 
+#: The finding of an IEC calibration whose bias items lack the gyro's temperature error.
+BIAS_TEMPERATURE_UNBOUNDED_CODE = "bias-temperature-unbounded"
+
+#: The items whose bound condition takes 5.3.3.6's coefficient for the gyro's temperature
+#: error at T_BASE (e_TU, :func:`bias_tc_bound_dps_per_c`), 0 without it.
+BIAS_TEMPERATURE_ITEMS = ("bias", "initial_bias_variation")
+
+
+def bias_temperature_finding(items: dict, chamber_bound_c: float):
+    """A flagged finding where 5.3.3.6 gives no coefficient (not measured or not in the
+    readings: :func:`bias_tc_bound_dps_per_c` then 0, the same decision the budgets took) and
+    items of :data:`BIAS_TEMPERATURE_ITEMS` are measured: it names each of them, their
+    intervals stated without the gyro's temperature error at T_BASE (± ``chamber_bound_c``:
+    the chamber's deviation and its place in the volume) times the bias's temperature
+    coefficient; None otherwise."""
+    from gonio.result.findings import Finding
+
+    tc = items.get("bias_temperature_coefficient")
+    hit = [items[k].clause for k in BIAS_TEMPERATURE_ITEMS if k in items and items[k].measured]
+    if (tc is not None and tc.measured) or not hit:
+        return None
+    why = (tc.reason if tc is not None and tc.reason else "the readings hold no 5.3.3.6 visits")
+    return Finding(BIAS_TEMPERATURE_UNBOUNDED_CODE,
+                   f"the chamber's temperature effect on the bias is not bounded: the bias "
+                   f"temperature coefficient of 5.3.3.6 is not measured ({why}), so the "
+                   f"intervals of {', '.join(hit)} are stated without a term for it (the "
+                   f"gyro's temperature error at T_BASE, ± {chamber_bound_c:g} °C: the "
+                   f"chamber's deviation and its place in the volume) — measure 5.3.3.6 or "
+                   f"state the coefficient's bound", "flagged", clause="5.3.3.1",
+                   rule="the bias items' temperature term bounded by 5.3.3.6's β")
+
+
 #: The code of :func:`noise_temperature_finding`.
 NOISE_TEMPERATURE_CODE = "noise-temperature-not-bounded"
 
