@@ -367,9 +367,10 @@ def test_provenance_rules(tmp_path):
     assert p["virtual"] and p["bench"] == "rlg" and p["seed"] is None
 
 
-def test_virtual_readings_marked_on_every_chinese_page(run):
-    """The Chinese certificate of the same readings and laboratory file: the mark on every
-    PDF page and in the HTML, as the English one (the language changes no rule)."""
+@pytest.fixture(scope="module")
+def run_zh(run):
+    """``gonio calibrate --lang zh`` of the run's readings with the same laboratory file: the
+    Chinese certificate the tests below only read (one calibration per specification)."""
     spec, seed, cal = run
     work = cal.parent
     proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
@@ -377,6 +378,14 @@ def test_virtual_readings_marked_on_every_chinese_page(run):
     gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
           lab_file(work, 'on_mismatch = "proceed"', name="lab-zh.toml"), "--lang", "zh",
           "--out", zh, cwd=work)
+    return zh
+
+
+def test_virtual_readings_marked_on_every_chinese_page(run, run_zh):
+    """The Chinese certificate of the same readings and laboratory file: the mark on every
+    PDF page and in the HTML, as the English one (the language changes no rule)."""
+    spec, seed, cal = run
+    zh = run_zh
     mark = labels("zh")["virtual_short"]
     pages = pdf_pages(zh / "certificate.pdf")
     assert len(pages) >= 2
@@ -394,7 +403,7 @@ def _first_page_text(pdf: Path) -> str:
     return " ".join(pdf_pages(pdf)[0].split())
 
 
-def test_first_page_flags_the_contradicted_identity(run):
+def test_first_page_flags_the_contradicted_identity(run, run_zh):
     """Proceeding with a laboratory file whose serial the readings contradict: page 1 (PDF and
     the HTML, English and Chinese) prints the laboratory file's serial with the flag pointing
     to the finding, and only that line; summary.txt flags the serial it states; the DCC's
@@ -427,12 +436,7 @@ def test_first_page_flags_the_contradicted_identity(run):
     st = next(s for s in root.iter(f"{{{DCC_NS}}}statement") if s.get("id") == ref)
     said = " ".join(c.text for c in st.iter(f"{{{DCC_NS}}}content"))
     assert f"say '{serial}'" in said and LAB_SERIAL in said, said
-    work = cal.parent                  # the Chinese certificate of the same readings
-    zh_out = work / "cal-zh-flag"
-    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
-    gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
-          lab_file(work, 'on_mismatch = "proceed"', name="lab-zh-flag.toml"), "--lang", "zh",
-          "--out", zh_out, cwd=work)
+    zh_out = run_zh                    # the Chinese certificate of the same readings
     page1 = re.sub(r"\s+", "", pdf_pages(zh_out / "certificate.pdf")[0])
     assert zh["serial"] + LAB_SERIAL + zh["identity_flag"] in page1, page1
     page = (zh_out / "certificate.html").read_text(encoding="utf-8")
