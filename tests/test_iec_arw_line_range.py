@@ -114,7 +114,7 @@ def test_the_item_states_the_standard_reading_the_rule_gives_on_the_data():
     cache = {key: (a, x * 3600.0, 0.1), "static_extent": (x.size, True),
              ("noise_fit", 6.0, 2500.0): fit_noise_model(a),
              ("noise_fit_shaped", 6.0, 2500.0): fit_markov_model(a)}
-    ctx = SimpleNamespace(a_base=6.0, null_output=2500.0, cache=cache, has=lambda t: True)
+    ctx = SimpleNamespace(a_base=6.0, null_output=2500.0, cache=cache, has=lambda t: t == "static")
     item = I.arw(ctx)
     tau, sig = np.asarray(a.tau_s, float), np.asarray(a.adev, float)
     lt, ls = np.log(tau), np.log(sig)

@@ -1,6 +1,9 @@
-"""The IEC noise items (5.4.5.2, 5.4.5.1 b), c)) carry no term for the gyro's temperature
-error at T_BASE: the calibration states, as a flagged finding, that they hold at the static
-record's temperature (the readings' temperature_c), with the chamber's bound."""
+"""The IEC noise items (5.4.5.2, 5.4.5.1 b), c)) at the static record's temperature: without
+the 5.3.3.6 visits they carry no term for the gyro's temperature error at T_BASE and the
+calibration states, as a flagged finding, that they hold at the record's temperature (the
+readings' temperature_c), with the chamber's bound; an item that carries the line is not
+named. The coefficient from the visits against the bench's own parameter: tests/
+test_rate_bound_u_c.py (the line) and below."""
 from __future__ import annotations
 
 import re
@@ -21,9 +24,11 @@ def _frame(static_c: float) -> pd.DataFrame:
         "temperature_c": [25.0] * 5 + [static_c] * n})
 
 
-def _items(measured=("arw", "inband_noise", "broadband_noise")):
+def _items(measured=("arw", "inband_noise", "broadband_noise"), lined=()):
     clauses = {"arw": "5.4.5.2", "inband_noise": "5.4.5.1 b)", "broadband_noise": "5.4.5.1 c)"}
-    return {k: SimpleNamespace(clause=c, measured=k in measured) for k, c in clauses.items()}
+    return {k: SimpleNamespace(clause=c, measured=k in measured, uncertainty=SimpleNamespace(
+        components=[{"symbol": "N"}] + ([{"symbol": "dT_noise"}] if k in lined else [])))
+        for k, c in clauses.items()}
 
 
 def test_the_finding_names_the_record_s_temperature_and_the_bound():
@@ -40,6 +45,13 @@ def test_the_finding_names_the_record_s_temperature_and_the_bound():
 
 def test_no_finding_without_a_measured_noise_item():
     assert I.noise_temperature_finding(_items(()), 20.0, 2.2) is None
+
+
+def test_an_item_with_its_temperature_line_is_not_named():
+    all_lined = _items(lined=("arw", "inband_noise", "broadband_noise"))
+    assert I.noise_temperature_finding(all_lined, 20.0, 2.2) is None
+    f = I.noise_temperature_finding(_items(lined=("arw",)), 20.0, 2.2)
+    assert "5.4.5.1 b)" in f.message and "5.4.5.2" not in f.message
 
 
 def test_the_zh_certificate_translates_the_finding():

@@ -24,6 +24,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from lxml import etree
 
@@ -71,11 +72,13 @@ def calibrated(root: Path, spec: str, drop_test: str | None = None) -> dict:
 _RUNS: dict = {}
 
 
-def _run(tmp_path_factory, spec: str) -> dict:
-    """One calibration per specification for the module (the tests only read it)."""
-    if spec not in _RUNS:
-        _RUNS[spec] = calibrated(tmp_path_factory.mktemp(spec), spec)
-    return _RUNS[spec]
+def _run(tmp_path_factory, spec: str, drop_test: str | None = None) -> dict:
+    """One calibration per specification (and dropped test) for the module (the tests only
+    read it)."""
+    key = (spec, drop_test)
+    if key not in _RUNS:
+        _RUNS[key] = calibrated(tmp_path_factory.mktemp(spec), spec, drop_test=drop_test)
+    return _RUNS[key]
 
 
 @pytest.fixture(scope="module", params=list(BOUND_ITEMS))
@@ -258,35 +261,72 @@ def test_zh_dcc_names_the_interval_quantity_whole(cal):
         assert zh_interval.endswith("p = 95 %"), zh_interval
 
 
-def test_iec_noise_items_hold_at_the_static_record_s_temperature(tmp_path_factory):
-    """The noise items (5.4.5.2, 5.4.5.1 b), c)) carry no term for the gyro's temperature error
-    at T_BASE: one flagged finding says they hold at the static record's temperature — the
-    readings' own temperature_c of the static rows, read here from the CSV text — within the
-    chamber's bound, on the certificate (en, zh without English words) and in results.json."""
+def test_iec_noise_items_carry_the_gyro_s_temperature_at_the_static_record(tmp_path_factory):
+    """The noise items (5.4.5.2, 5.4.5.1 b), c)) are measured at the static record's
+    temperature, the certificate states them at T_BASE: with the 5.3.3.6 visits each carries
+    the line value·√(c² + u²(c))·ΔT/√3, c the white level's coefficient from the visits and ΔT
+    the chamber's bound plus the record's logged offset from T_BASE (read here from the CSV
+    text), and no finding; without the visits (the readings less their 5.3.3.6 rows) no line
+    and one flagged finding naming the three items, the record's temperature and the bound,
+    on the certificate (en, zh without English words) and in results.json."""
     from gonio.report.i18n import finding_text, labels
     from gonio.specs.iec62047_20.certificate import PHRASES_ZH
     from tests.test_zh_certificates import WHITELIST, WORD
 
+    keys = ("arw", "inband_noise", "broadband_noise")
     c = _run(tmp_path_factory, "iec62047-20")
-    found = [f for f in c["res"]["findings"] if f["code"] == "noise-temperature-not-bounded"]
-    assert len(found) == 1 and found[0]["action"] == "flagged", c["res"]["findings"]
-    msg = found[0]["message"]
+    res = c["res"]
     header = next(l for l in c["text"].splitlines() if not l.startswith("#")).split(",")
     col, tcol = header.index("test"), header.index("temperature_c")
     temps = {float(l.split(",")[tcol]) for l in c["text"].splitlines()
              if not l.startswith("#") and l.split(",")[col] == "static"}
     assert len(temps) == 1
+    t_base = 0.5 * (-40.0 + 85.0)                      # the small programme's range
+    dT = _chamber_bound_c(c["text"]) + abs(temps.pop() - t_base)
+    tc = res["items"]["arw"]["details"]["noise_temperature_coefficient_per_c"]
+    assert tc["visits"] >= 2 and abs(tc["value"]) > tc["u"] > 0
+    # the coefficient against the bench's own parameter (its white level ∝ 1 + a(T − T_ref)):
+    # the least-squares slope of ln(1 + a(T_i − T_ref)) over the visits' temperatures
+    import tomllib
+
+    g = tomllib.loads((Path(__file__).parents[1] / "protocols" / "benches" /
+                       "mems-adxrs610.toml").read_text(encoding="utf-8"))["gyro"]
+    tv = np.array([float(l.split(",")[tcol]) for l in c["text"].splitlines()
+                   if not l.startswith("#") and l.split(",")[col] == "bias_temperature"])
+    lt = np.log1p(g["arw_tc1_per_c"] * (tv - g["reference_temperature_c"]))
+    expect = float(np.polyfit(tv, lt, 1)[0])
+    assert abs(tc["value"] - expect) < 3.0 * tc["u"], (tc, expect)
+    for key in keys:
+        it = res["items"][key]
+        line = [r for r in it["uncertainty"]["components"] if r["symbol"] == "dT_noise"]
+        assert len(line) == 1, it["uncertainty"]["components"]
+        c_rms = (tc["value"] ** 2 + tc["u"] ** 2) ** 0.5
+        assert line[0]["u"] == pytest.approx(it["value"] * c_rms * dT / 3 ** 0.5, rel=1e-9)
+    assert not [f for f in res["findings"] if f["code"] == "noise-temperature-not-bounded"]
+
+    d = _run(tmp_path_factory, "iec62047-20", drop_test="bias_temperature")
+    res = d["res"]
+    assert res["items"]["arw"]["details"]["noise_temperature_coefficient_per_c"] is None
+    for key in keys:
+        assert not [r for r in res["items"][key]["uncertainty"]["components"]
+                    if r["symbol"] == "dT_noise"]
+    found = [f for f in res["findings"] if f["code"] == "noise-temperature-not-bounded"]
+    assert len(found) == 1 and found[0]["action"] == "flagged", res["findings"]
+    msg = found[0]["message"]
+    header = next(l for l in d["text"].splitlines() if not l.startswith("#")).split(",")
+    col, tcol = header.index("test"), header.index("temperature_c")
+    temps = {float(l.split(",")[tcol]) for l in d["text"].splitlines()
+             if not l.startswith("#") and l.split(",")[col] == "static"}
     for part in ("5.4.5.2", "5.4.5.1 b)", "5.4.5.1 c)", f"({temps.pop():g} °C",
-                 f"± {_chamber_bound_c(c['text']):g} °C", "not at T_BASE"):
+                 f"± {_chamber_bound_c(d['text']):g} °C", "not at T_BASE", "5.3.3.6 visits"):
         assert part in msg, (part, msg)
-    assert "hold at the gyro's temperature during the static record" in _plain(c["html"])
+    assert "hold at the gyro's temperature during the static record" in _plain(d["html"])
     zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
-    assert "噪声项" in zh and "而非 T_BASE" in zh
+    assert "噪声项" in zh and "而非 T_BASE" in zh and "5.3.3.6" in zh
     assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"temperature_c"}], zh
 
 
-def test_iec_without_its_bias_temperature_coefficient_names_the_bias_items(tmp_path,
-                                                                           tmp_path_factory):
+def test_iec_without_its_bias_temperature_coefficient_names_the_bias_items(tmp_path_factory):
     """The readings less their 5.3.3.6 rows: the bias (5.3.3.1) and 5.3.3.2 lose the gyro's
     temperature error at T_BASE (e_TU 0 in their bound condition), and one flagged finding
     names both, on the certificate, in summary.txt and in Chinese without an English word;
@@ -299,7 +339,7 @@ def test_iec_without_its_bias_temperature_coefficient_names_the_bias_items(tmp_p
     assert not [f for f in whole["findings"] if f["code"] == "bias-temperature-unbounded"]
     for key in ("bias", "initial_bias_variation"):
         assert whole["items"][key]["details"]["bound_condition"]["a_lines"]["e_TU"] > 0
-    c = calibrated(tmp_path, "iec62047-20", drop_test="bias_temperature")
+    c = _run(tmp_path_factory, "iec62047-20", drop_test="bias_temperature")
     res = c["res"]
     assert not res["items"].get("bias_temperature_coefficient", {"measured": False})["measured"]
     for key in ("bias", "initial_bias_variation"):

@@ -88,8 +88,9 @@ COMMON_PHRASES_ZH = (
      "两个静止点之间的零偏漂移（Allan 拟合：RRW、BI）"),
     (r"bias drift between the visits \(Allan fit: RRW, BI\)",
      "各次到达之间的零偏漂移（Allan 拟合：RRW、BI）"),
-    (r"bias drift over the turn projected on the regressor, u_drift\(duration\)·√\(2/n\)",
-     "转动期间零偏漂移在回归量上的投影，u_drift(时长)·√(2/n)"),
+    (r"bias drift over the turn projected on the regressor \(the slope's weights on the "
+     r"records' windows under the walk and flicker of the static record\)",
+     "转动期间零偏漂移在回归量上的投影（斜率对各段记录时间窗的权重，按静态记录的角速率随机游走与闪烁噪声）"),
     # the screening's findings (gonio.specs._rate_family.screening), on the certificate
     (r"(\w+) (\S+) departs from its neighbours by (\S+) \(limit (\S+)\)",
      "{1} 值 {2} 偏离相邻样本 {3}（限 {4}）"),

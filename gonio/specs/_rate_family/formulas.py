@@ -33,6 +33,7 @@ Contents
 :func:`bias_drift_u`            drift of a bias difference, Allan floor + K√Δt
 :func:`record_difference_u`     the same for two records' means, exact for their spans
 :func:`record_difference_u_coef` the same with K² and B² given
+:func:`window_combination_u_coef` any zero-sum combination of window means (a slope)
 ==============================  ==================================================
 
 Unit note: seconds per hour come from :mod:`gonio.units` (``S_PER_H``).
@@ -640,18 +641,47 @@ def record_difference_u_coef(k2: float, b2: float, first: tuple[float, float],
                              second: tuple[float, float]) -> float:
     """:func:`record_difference_u` with the rate random walk's K² and the flicker's B²
     given (a specification's own rule for them, e.g. IEC 62047-20's
-    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound`).
+    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound`): the combination
+    m₂ − m₁ of :func:`window_combination_u_coef`.
 
     >>> round(record_difference_u_coef(0.0, 1.0, (0.0, 60.0), (60.0, 60.0)), 6)
     0.939437
     """
+    return window_combination_u_coef(k2, b2, [first, second], [-1.0, 1.0])
+
+
+def window_combination_u_coef(k2: float, b2: float, windows, weights) -> float:
+    """Standard uncertainty that the rate random walk (K², (unit)²/s) and the bias
+    instability's flicker (B², (unit)²) give the combination Σ w_i·m_i of the bias drift's
+    means m_i over the ``windows`` (start s, duration s) on one time line, e.g. a
+    least-squares slope's row of (AᵀA)⁻¹Aᵀ over records whose means are regressed (the
+    white noise is in each mean's own u).
+
+    Each m_i = (θ(t_i + d_i) − θ(t_i))/d_i of the angle θ, so the combination is one of
+    2n angle values whose coefficients sum to zero and whose first moment is Σ w_i; with
+    Σ w_i = 0 (a combination blind to a constant bias: a difference, or a slope fitted
+    with an intercept) its variance is Σ c_a c_b G(t_a − t_b) with the five-term model's
+    generalised covariance G (:func:`gonio.analysis.noise.covariance.generalised_covariance`:
+    flicker B²t² ln|t|/(2π), rate random walk K²|t|³/12), exact for the model. A
+    combination with Σ w_i ≠ 0 sees the drift's unbounded level: refused.
+
+    >>> round(window_combination_u_coef(1.0, 0.0, [(0.0, 1.0), (10.0, 1.0)], [-1, 1]) ** 2, 6)
+    9.666667
+    """
     from gonio.analysis.noise.covariance import generalised_covariance
 
-    (t1, d1), (t2, d2) = ((float(a), float(b)) for a, b in (first, second))
-    if d1 <= 0 or d2 <= 0:
-        raise GonioError(f"record durations {d1:g} s and {d2:g} s: both must be positive")
-    pts = np.array([t1, t1 + d1, t2, t2 + d2])
-    c = np.array([1 / d1, -1 / d1, -1 / d2, 1 / d2])
+    w = np.asarray(weights, dtype=np.float64)
+    win = np.asarray(windows, dtype=np.float64).reshape(-1, 2)
+    if w.size != win.shape[0]:
+        raise GonioError(f"{w.size} weights for {win.shape[0]} windows")
+    if np.any(win[:, 1] <= 0):
+        raise GonioError(f"window durations {', '.join(f'{d:g}' for d in win[:, 1])} s: "
+                         f"each must be positive")
+    if abs(float(w.sum())) > 1e-9 * max(1.0, float(np.abs(w).sum())):
+        raise GonioError(f"weights summing to {float(w.sum()):g}, not 0: the combination "
+                         f"would see the drift's level, which no record bounds")
+    pts = np.column_stack([win[:, 0], win[:, 0] + win[:, 1]]).ravel()
+    c = np.column_stack([-w / win[:, 1], w / win[:, 1]]).ravel()
     lag = np.abs(pts[:, None] - pts[None, :])
     var = float(c @ generalised_covariance(lag, [0.0, 0.0, b2, k2], 1.0) @ c)
     return math.sqrt(max(var, 0.0))

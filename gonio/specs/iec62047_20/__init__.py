@@ -120,7 +120,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     # the bias without 5.3.3.6's β: its e_TU is 0, said so
     bias_t = _items.bias_temperature_finding(items, _items.gyro_temperature_bound_c(ctx))
     findings = findings + ([bias_t] if bias_t is not None else [])
-    # the noise items hold at the static record's temperature: said so
+    # the noise items without a temperature line (no 5.3.3.6 visits): said so
     noise_t = _items.noise_temperature_finding(
         items, _items.static_record_temperature_c(ctx.df), _items.gyro_temperature_bound_c(ctx))
     findings = findings + ([noise_t] if noise_t is not None else [])

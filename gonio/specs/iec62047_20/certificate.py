@@ -180,11 +180,16 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"the noise items (.+?) hold at the gyro's temperature during the static record "
      r"\((.+?), the readings' temperature_c, with the gyro within ± (\S+) °C of it: the "
      r"chamber's deviation and its place in the volume\), not at T_BASE: their intervals "
-     r"carry no term for the noise's temperature dependence \(no coefficient for it in the "
-     r"readings\)",
+     r"carry no term for the noise's temperature dependence \(the readings hold no 5\.3\.3\.6 "
+     r"visits at two temperatures, which give its coefficient\)",
      "噪声项 {1} 仅对静态记录期间陀螺的温度成立（{2}，读数中的 temperature_c，陀螺在其 ± {3} °C "
      "以内：温箱偏差及其在容积内的位置），而非 T_BASE：其区间未计入噪声随温度变化的分量"
-     "（读数中无该系数）"),
+     "（读数中没有两个温度以上的 5.3.3.6 温度点，无法得到该系数）"),
+    (r"the gyro's temperature during the static record against T_BASE \(± the chamber's "
+     r"deviation and place bounds, and the record's logged offset\) × the white level's "
+     r"coefficient from the 5\.3\.3\.6 visits, √\(c² \+ u²\(c\)\)",
+     "静态记录期间陀螺温度相对 T_BASE 的偏差（± 温箱偏差及位置界限，加记录的温度偏移）× 由 5.3.3.6 "
+     "温度点得到的白噪声水平系数 √(c² + u²(c))"),
     (r"half range of (\d+) records; interval from the distribution of the range of normal "
      r"values \(Tippett\)", "{1} 次记录的半极差；区间按正态值极差的分布求得"),
     (r"alignment of the input axis to the plane perpendicular to the rotation axis \(table axis "

@@ -344,9 +344,9 @@ def bias_temperature_finding(items: dict, chamber_bound_c: float):
 #: The code of :func:`noise_temperature_finding`.
 NOISE_TEMPERATURE_CODE = "noise-temperature-not-bounded"
 
-#: The noise items stated at the static record's temperature: no budget line for the
-#: gyro's temperature error at T_BASE (the noise's temperature coefficient is not among
-#: the readings).
+#: The noise items stated at the static record's temperature: their budget line for the
+#: gyro's temperature error at T_BASE (:func:`noise_temperature_line`) needs the 5.3.3.6
+#: visits; without them the finding (:func:`noise_temperature_finding`).
 NOISE_ITEMS = ("arw", "inband_noise", "broadband_noise")
 
 
@@ -367,16 +367,27 @@ def static_record_temperature_c(df: pd.DataFrame) -> float | None:
     return float(np.median(t)) if t.size else None
 
 
+def has_noise_temperature_line(item) -> bool:
+    """Whether a noise item's budget carries :func:`noise_temperature_line` (``dT_noise``)."""
+    u = getattr(item, "uncertainty", None)
+    return any(c.get("symbol") == "dT_noise" for c in (getattr(u, "components", None) or ()))
+
+
 def noise_temperature_finding(items: dict, record_c: float | None, bound_c: float):
-    """A flagged finding where any of :data:`NOISE_ITEMS` is measured: the noise items
+    """A flagged finding where any of :data:`NOISE_ITEMS` is measured without a temperature
+    line (:func:`has_noise_temperature_line`): the noise items
     (5.4.5.2, 5.4.5.1 b), c)) are stated at the gyro's temperature during the static record
     (``record_c``, the readings' ``temperature_c``), which the chamber holds within
     ± ``bound_c`` (:func:`gyro_temperature_bound_c`: its deviation bound and the gyro's
     place in the volume, Table 2), not at T_BASE: the white level moves with temperature
-    and the readings give no coefficient for it, so their intervals carry no term for it."""
+    and the readings give no coefficient for it (no 5.3.3.6 visits at two temperatures:
+    :func:`noise_temperature_coefficient` is None; with them the items carry
+    :func:`noise_temperature_line` and are not named), so their intervals carry no term
+    for it."""
     from gonio.result.findings import Finding
 
-    hit = [items[k].clause for k in NOISE_ITEMS if k in items and items[k].measured]
+    hit = [items[k].clause for k in NOISE_ITEMS if k in items and items[k].measured
+           and not has_noise_temperature_line(items[k])]
     if not hit:
         return None
     at = "its stated temperature" if record_c is None else f"{record_c:g} °C"
@@ -385,9 +396,103 @@ def noise_temperature_finding(items: dict, record_c: float | None, bound_c: floa
                    f"the static record ({at}, the readings' temperature_c, with the gyro "
                    f"within ± {bound_c:g} °C of it: the chamber's deviation and its place in "
                    f"the volume), not at T_BASE: their intervals carry no term for the "
-                   f"noise's temperature dependence (no coefficient for it in the readings)",
+                   f"noise's temperature dependence (the readings hold no 5.3.3.6 visits at "
+                   f"two temperatures, which give its coefficient)",
                    "flagged", test="static", column="temperature_c", clause="5.4.5",
                    rule="the noise items at the static record's temperature")
+
+
+@dataclass(frozen=True)
+class NoiseTemperatureCoefficient:
+    """The relative temperature coefficient of the gyro's white noise level (1/°C) from the
+    5.3.3.6 visits (:func:`noise_temperature_coefficient`): ``value`` the weighted
+    least-squares slope of ln σ_i against T_i, ``u`` its standard uncertainty, ``nu`` its
+    Welch–Satterthwaite ν, ``visits`` how many records; ``rms`` √(value² + u²), the
+    coefficient's magnitude a GUM line takes for a product with a zero-mean temperature
+    error (JCGM 100 5.1.2 to second order: u²(cΔT) = (c² + u²(c))·u²(ΔT))."""
+
+    value: float
+    u: float
+    nu: float
+    visits: int
+
+    @property
+    def rms(self) -> float:
+        return math.hypot(self.value, self.u)
+
+
+def noise_temperature_coefficient(ctx: Context) -> NoiseTemperatureCoefficient | None:
+    """The white noise level's relative temperature coefficient from the 5.3.3.6 visits'
+    records (IEC 62047-20 5.3.3.6 takes them at m + 1 temperatures for the bias; their
+    sample-to-sample scatter is the gyro's white noise at each temperature): per visit
+    σ_i = sd(first differences)/√2 of its output in °/s (divided by a(T_i) of 5.1.3.4 where
+    measured at that temperature, else a_BASE — the output's noise scales with K too), which
+    drops the bias's slow drift and settling; the slope c of ln σ_i against T_i by weighted
+    least squares, each ln σ_i of variance 3/(4n_i) (the sample variance of n differences
+    of white noise: var(s²_d)/E[s²_d]² = 3/n, the lag-one correlation −½ counted), ν_i =
+    2n_i/3, ν of c by Welch–Satterthwaite (JCGM 100 G.4.1). Reading taken (the standard
+    states no noise coefficient; docs/iec62047-20-readings.md): the white level's
+    coefficient stands for the noise items' (5.4.5.2 is the white level; 5.4.5.1 b), c)
+    are mostly white on a rate gyro). None where the readings hold no visits at two
+    temperatures or no a_BASE: the noise items then carry the finding
+    (:func:`noise_temperature_finding`)."""
+    key = ("noise_tc", ctx.a_base)
+    if key in ctx.cache:
+        return ctx.cache[key]
+    out = None
+    if ctx.has("bias_temperature") and ctx.a_base is not None:
+        kmap = {round(c["T"], 6): c["a"] for c in _sf_runs(ctx, "sf_temperature")} \
+            if ctx.has("sf_temperature") else {}
+        T, ln_s, var, nus = [], [], [], []
+        for s in segment_means(ctx.df, "bias_temperature"):
+            y = segment_samples(ctx.df, "bias_temperature", s.run, s.step)["output"].to_numpy()
+            d = np.diff(y.astype(float))
+            d = d[np.isfinite(d)]
+            if d.size < 10:
+                continue
+            sd = float(np.std(d, ddof=1)) / math.sqrt(2.0) / abs(kmap.get(round(s.temperature_c, 6), ctx.a_base))
+            if not sd > 0:
+                continue
+            T.append(s.temperature_c)
+            ln_s.append(math.log(sd))
+            var.append(3.0 / (4.0 * d.size))
+            nus.append(2.0 * d.size / 3.0)
+        if len(set(T)) >= 2:
+            T, ln_s, w = np.array(T), np.array(ln_s), 1.0 / np.array(var)
+            tm = float((w * T).sum() / w.sum())
+            sxx = float((w * (T - tm) ** 2).sum())
+            c = float((w * (T - tm) * ln_s).sum()) / sxx
+            parts = w * (T - tm) / sxx * np.sqrt(np.array(var))    # each visit's share of u(c)
+            u = math.sqrt(1.0 / sxx)
+            nu = welch_satterthwaite(u, list(parts), nus)
+            out = NoiseTemperatureCoefficient(c, u, nu, len(T))
+    ctx.cache[key] = out
+    return out
+
+
+#: The source of the noise items' temperature line (en; the zh certificate translates it).
+NOISE_TEMPERATURE_SOURCE = ("the gyro's temperature during the static record against T_BASE "
+                            "(± the chamber's deviation and place bounds, and the record's "
+                            "logged offset) × the white level's coefficient from the 5.3.3.6 "
+                            "visits, √(c² + u²(c))")
+
+
+def noise_temperature_line(ctx: Context, value: float, record_c: float | None):
+    """The noise items' line (rectangular, the item's unit) for the gyro's temperature during
+    the static record against T_BASE, or None where :func:`noise_temperature_coefficient`
+    gives no coefficient (the finding then says so): half-width value·√(c² + u²(c))·ΔT
+    (the product of the uncertain coefficient and the zero-mean temperature error, JCGM 100
+    5.1.2 to second order) with ΔT = :func:`gyro_temperature_bound_c` + |record_c − T_BASE|
+    (the record's logged temperature, where the readings hold it; 0 where not) — the
+    chamber's deviation and the gyro's place added linearly into one rectangular, as every
+    chamber line of the rate specifications takes them."""
+    tc = noise_temperature_coefficient(ctx)
+    if tc is None:
+        return None
+    dT = gyro_temperature_bound_c(ctx) + (abs(record_c - ctx.t_base_c) if record_c is not None
+                                          and math.isfinite(record_c) else 0.0)
+    return type_b("dT_noise", 0.0, abs(value) * tc.rms * dT, "rectangular",
+                  source=NOISE_TEMPERATURE_SOURCE)
 
 
 def scale_factor(ctx: Context) -> Item:
@@ -1215,8 +1320,10 @@ def arw(ctx: Context) -> Item:
     χ² 95 % interval alone (:func:`arw_uncertainty`): the line reading's spread from the
     equivalent degrees of freedom of its Allan variances under the five-term model fitted to
     the same record (:func:`arw_line_edf`; the noise types the fit assumes, not those
-    identified τ by τ), and the correction's model (the band-limited against the five-term
-    factor, rectangular); no k, no "± U".
+    identified τ by τ), the correction's model (the band-limited against the five-term
+    factor, rectangular) and the gyro's temperature during the record against T_BASE
+    (:func:`noise_temperature_line`, where the 5.3.3.6 visits give the coefficient; without
+    them a finding says the items hold at the record's temperature); no k, no "± U".
 
     The line's τ range is 5.4.5.2 e)'s reading taken (from the shortest τ to the first whose
     local slope leaves −½ ± 0.05) applied to the fitted model's curve, not to the data
@@ -1236,7 +1343,8 @@ def arw(ctx: Context) -> Item:
     midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     edf = arw_line_edf(allan, mask, fit)
     ratio_five_same = arw_lift_factor(allan.tau_s, mask, fit)
-    u = arw_uncertainty(value, ratio, edf, ratio_five_same)
+    u = arw_uncertainty(value, ratio, edf, ratio_five_same,
+                        temperature=_noise_temperature_line(ctx, value))
     std_val, std_mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
@@ -1251,6 +1359,7 @@ def arw(ctx: Context) -> Item:
              "the model's lift factor"),
             ("标准的读数（由数据自身斜率确定的短 τ 区间内斜率 −½ 的直线，在 1 小时处读取）{v}",
              "由拟合噪声模型的斜率确定区间的直线读数，除以模型的抬升因子")),
+        "noise_temperature_coefficient_per_c": _noise_tc_details(ctx),
         "flicker_band_t_lo_s": shaped.t_lo_s,
         "five_term_line_bias_factor": ratio_five,
         "five_term_lift_same_tau": ratio_five_same,
@@ -1340,7 +1449,7 @@ def arw_line_edf(allan, mask, fit) -> float:
 
 
 def arw_uncertainty(value: float, ratio: float, edf: float,
-                    ratio_alt: float | None = None) -> Uncertainty:
+                    ratio_alt: float | None = None, temperature=None) -> Uncertainty:
     """The one statement of 5.4.5.2's ARW (:func:`arw`): a dispersion, stated as the noise rms
     is (:func:`gonio.result.gum.dispersion_uncertainty`), by its one-sided χ² 95 % interval
     [0, N·√(ν/χ²_0.05,ν)] with ν = ½(N/u_c)². The budget: the line reading, u = N/√(2·edf)
@@ -1354,17 +1463,21 @@ def arw_uncertainty(value: float, ratio: float, edf: float,
     own bias instability, so the corrected value scatters less than the line (0.45 % against
     the line's u 0.52 % on the built-in record). Without the correction ν = edf and the
     upper end is N·√(edf/χ²_0.05,edf), the χ² interval of the Allan deviations the line
-    reads."""
+    reads. ``temperature``: the line for the gyro's temperature during the record against
+    T_BASE (:func:`noise_temperature_line`, °/√h), added where given."""
     u_n = value / math.sqrt(2.0 * edf) if edf > 0 and math.isfinite(edf) else 0.0
     alt = ratio if ratio_alt is None or not math.isfinite(ratio_alt) or ratio_alt <= 0 \
         else ratio_alt
-    u = gum(lambda n, c: n * (1 + c),
-            [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
+    lines = [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
                     source="χ² of the −½ line's Allan variances: edf of the line reading "
                            "under the fitted five-term model"),
              type_b("corr", 0.0, abs(ratio / alt - 1.0), "rectangular",
                     source="lift correction's model: band-limited against the five-term "
-                           "fit's factor over the same τ (bound)")])
+                           "fit's factor over the same τ (bound)")]
+    if temperature is None:
+        u = gum(lambda n, c: n * (1 + c), lines)
+    else:
+        u = gum(lambda n, c, t: n * (1 + c) + t, lines + [temperature])
     return dispersion_uncertainty(value, u)
 
 
@@ -1580,6 +1693,32 @@ def _fluctuation_noise_line(ctx: Context, x, dt: float, nper: int, f_lo: float, 
                          "power)")
 
 
+def _noise_budget(lines: list, temperature):
+    """The GUM sum of a noise rms's lines (the estimate and its fluctuation line), with the
+    temperature line (:func:`noise_temperature_line`) where there is one."""
+    if temperature is None:
+        return gum(lambda r, e: r + e, lines)
+    return gum(lambda r, e, t: r + e + t, lines + [temperature])
+
+
+def _noise_temperature_line(ctx: Context, value: float):
+    """:func:`noise_temperature_line` at the static record's logged temperature (None
+    without a coefficient, :func:`noise_temperature_coefficient`)."""
+    if noise_temperature_coefficient(ctx) is None:
+        return None
+    key = ("static_record_c",)
+    if key not in ctx.cache:
+        ctx.cache[key] = static_record_temperature_c(ctx.df)
+    return noise_temperature_line(ctx, value, ctx.cache[key])
+
+
+def _noise_tc_details(ctx: Context) -> dict | None:
+    """:func:`noise_temperature_coefficient` for the details (None without visits)."""
+    tc = noise_temperature_coefficient(ctx)
+    return None if tc is None else {"value": tc.value, "u": tc.u, "nu": tc.nu,
+                                    "visits": tc.visits}
+
+
 def inband_noise(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.1 b), reading taken: the rms output noise below ``band_hz`` (°/s) from
     the Welch one-sided density, and the amplitude density ((°/s)/√Hz) at stated frequencies
@@ -1587,7 +1726,9 @@ def inband_noise(ctx: Context) -> Item:
 
     Uncertainty: the Welch estimate's own scatter
     (:func:`gonio.analysis.noise.psd.welch_band_rms_u_rel`: correlated Hann lines and
-    overlapping segments) and the chamber's fluctuation. The rms is a dispersion and is
+    overlapping segments), the chamber's fluctuation and the gyro's temperature during the
+    record against T_BASE (:func:`noise_temperature_line`, where the 5.3.3.6 visits give the
+    coefficient). The rms is a dispersion and is
     stated as one, by its one-sided χ² 95 % interval alone with ν = ½(rms/u_c)²
     (:func:`gonio.result.gum.dispersion_uncertainty`): no k, no "± U"."""
     t, cl, un = "in-band noise (rms)", "5.4.5.1 b)", "°/s"
@@ -1605,10 +1746,11 @@ def inband_noise(ctx: Context) -> Item:
         else math.nan
     u_rel = u_rel if math.isfinite(u_rel) else 0.0           # no noise in the band
     nu = max(1.0, 0.5 / u_rel ** 2) if u_rel > 0 else 50     # Welch: ν = 2/var_rel(rms²)
-    u = gum(lambda r, e: r + e, [from_u("rms", rms, rms * u_rel, dof=nu,
-                                        source="Welch estimate: correlated Hann lines and "
-                                               "overlapping segments"),
-                                 _fluctuation_noise_line(ctx, x, dt, nper, 0.0, band, rms)])
+    u = _noise_budget([from_u("rms", rms, rms * u_rel, dof=nu,
+                              source="Welch estimate: correlated Hann lines and "
+                                     "overlapping segments"),
+                       _fluctuation_noise_line(ctx, x, dt, nper, 0.0, band, rms)],
+                      _noise_temperature_line(ctx, rms))
     u = dispersion_uncertainty(rms, u)
     return Item("inband_noise", t, cl, un, rms, uncertainty=u,
                 details={"density_dps_per_sqrt_hz": dens, "band_hz": band})
@@ -2867,7 +3009,7 @@ def g_sensitivity(ctx: Context) -> Item:
 
     Uncertainty: the slope's least-squares standard error (ν = points − 3), the bias drift
     over the turn (correlated from angle to angle, so the residuals miss it) projected on
-    the regressor, and a_BASE's relative u_c with its ν (:func:`_e_a`; the rate table's
+    the regressor (:func:`slope_drift_projection_u_dps`), and a_BASE's relative u_c with its ν (:func:`_e_a`; the rate table's
     line alone was a part of it, of ν = ∞)."""
     t, cl, un = "linear g sensitivity", "5.3.3.8", "(°/s)/g"
     m = _miss(ctx, "g_sensitivity", "g_sensitivity", t, cl, un)
@@ -2895,13 +3037,9 @@ def g_sensitivity(ctx: Context) -> Item:
         r = (w - e) - A @ np.linalg.lstsq(A, w - e, rcond=None)[0]
         dof = max(w.size - 3, 1)
         cov = float(r @ r) / dof * np.linalg.inv(A.T @ A)
-        dur = seg[-1].time_s - seg[0].time_s
-        u_dr = drift_u_dps(ctx, dur) * math.sqrt(2.0 / w.size)
-        if name == "parallel":
-            res[name] = (s1, math.sqrt(cov[1, 1]), dof, u_dr)
-        else:
-            k = 1 if abs(s1) >= abs(s2) else 2
-            res[name] = ((s1, s2)[k - 1], math.sqrt(cov[k, k]), dof, u_dr)
+        k = 1 if name == "parallel" or abs(s1) >= abs(s2) else 2
+        u_dr = slope_drift_projection_u_dps(ctx, seg, A, k)
+        res[name] = ((s1, s2)[k - 1], math.sqrt(cov[k, k]), dof, u_dr)
     if not res:
         return not_measured("g_sensitivity", t, cl, un, "no tilting-stand set-up with ≥ 4 angles")
     key = max(res, key=lambda k: abs(res[k][0]))
@@ -2912,8 +3050,9 @@ def g_sensitivity(ctx: Context) -> Item:
         return gum(lambda s, d, e: (s + d) * (1 + e),
                    [from_u("slope", s_, se_, dof=dof_, source=f"least-squares slope ({name})"),
                     from_u("drift", 0.0, u_dr_, dof=DOF_U_WITHIN_10PCT,
-                           source="bias drift over the turn projected on the regressor, "
-                                  "u_drift(duration)·√(2/n)"),
+                           source="bias drift over the turn projected on the regressor "
+                                  "(the slope's weights on the records' windows under the "
+                                  "walk and flicker of the static record)"),
                     _e_a(ctx)])
 
     names = list(res)
@@ -2926,6 +3065,24 @@ def g_sensitivity(ctx: Context) -> Item:
         "out_gv_dps_per_g": res.get("perpendicular", (math.nan,))[0], "set_up": key})
 
 
+def slope_drift_projection_u_dps(ctx: Context, seg, A: np.ndarray, col: int) -> float:
+    """Standard uncertainty (°/s per regressor unit) that the bias drift gives the
+    least-squares coefficient ``col`` of the design ``A`` (an intercept column first) fitted
+    to the means of the records ``seg`` (:class:`SegmentMean`, each from its ``time_s`` for
+    its ``n`` samples): the coefficient is Σ c_i·m_i with c the row of (AᵀA)⁻¹Aᵀ, Σ c_i = 0
+    (the intercept takes the level), so its drift part has the variance of that combination
+    of window means under the rate random walk and flicker of :func:`drift_coef_dps`
+    (:func:`gonio.specs._rate_family.formulas.window_combination_u_coef`, the five-term
+    model's generalised covariance; IEEE 952 C.1). The same refusals as
+    :func:`drift_u_dps`; a record that does not vary: 0."""
+    if not _drift_varies(ctx):
+        return 0.0
+    dt = ctx.protocol["protocol"]["sample_interval_s"]
+    c = np.linalg.pinv(np.asarray(A, float))[col]
+    k2, b2 = drift_coef_dps(ctx)
+    return rg.window_combination_u_coef(k2, b2, [(s.time_s, s.n * dt) for s in seg], c)
+
+
 def broadband_noise(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.1 c), reading taken (:func:`gonio.specs.iec62047_20.formulas.broadband_noise_iec`):
     the rms noise (°/s, Table 4) of the static record's one-sided Welch density over the
@@ -2936,7 +3093,8 @@ def broadband_noise(ctx: Context) -> Item:
     Uncertainty: the Welch estimate, u_rel = 1/√(segments × lines) (the estimate's own
     scatter, :func:`gonio.analysis.noise.psd.welch_band_rms_u_rel`, is smaller and alone
     under-covered the study on the 2-h record: docs/iec62047-20-readings.md), with the ν of
-    a standard deviation of that spread, ½/u_rel², and the chamber's fluctuation. The rms
+    a standard deviation of that spread, ½/u_rel², the chamber's fluctuation and the gyro's
+    temperature during the record against T_BASE (:func:`noise_temperature_line`). The rms
     is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone with
     ν = ½(rms/u_c)² (:func:`gonio.result.gum.dispersion_uncertainty`): no k, no "± U"."""
     t, cl, un = "broadband noise (rms)", "5.4.5.1 c)", "°/s"
@@ -2952,11 +3110,12 @@ def broadband_noise(ctx: Context) -> Item:
     d = ief.broadband_noise_iec(f, p, nz["band_hz"], f_hi)
     nseg = max(1, 2 * x.size // nper - 1)
     u_rel = 1.0 / math.sqrt(nseg * d["lines"])
-    u = gum(lambda r, e: r + e, [
+    u = _noise_budget([
         from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=0.5 / u_rel ** 2,
                source="Welch estimate over the broadband lines"),
         _fluctuation_noise_line(ctx, x, dt, nper, nz["band_hz"], f_hi,
-                                d["rms_dps"], include_lo=True)])
+                                d["rms_dps"], include_lo=True)],
+        _noise_temperature_line(ctx, d["rms_dps"]))
     u = dispersion_uncertainty(d["rms_dps"], u)
     return Item("broadband_noise", t, cl, un, d["rms_dps"], uncertainty=u, details={
         **d, "band_low_hz": nz["band_hz"], "band_high_hz": f_hi})
