@@ -75,7 +75,7 @@ def test_floor_reading_removes_the_rule_bias():
     raw, val = [], []
     for _ in range(24):
         a = _record(coef, rng)
-        r, _, b, _, _, _, _ = I.floor_reading(a, fit_noise_model(a))
+        r, _, b, _, _, _, _, _ = I.floor_reading(a, fit_noise_model(a))
         raw.append(r)
         val.append(b)
     raw, val = np.array(raw), np.array(val)

@@ -1,5 +1,6 @@
 """An interval taken from a Monte Carlo's draws is stated only to the digits its finite number
-of draws supports (JCGM 101 7.9): IEC 62047-20 5.3.3.5's interval of 400 replicates. The
+of draws supports (JCGM 101 7.9): IEC 62047-20 5.3.3.5's interval of 400 replicates and
+5.4.5.3's interval of 4000 floor-rule draws. The
 numerical standard uncertainty of a quantile is checked against the closed form for normal
 draws and the spread of quantiles over independent draw sets (not against itself)."""
 
@@ -47,10 +48,24 @@ def test_state_interval_moves_the_place_left_never_narrower():
     assert state_interval(0.0995, iv, p=0.95, numerical_u=1e-6) == plain
 
 
-def test_power_on_interval_is_stated_to_its_supported_digits(shared_demo):
+def test_floor_interval_numerical_u_matches_the_spread_of_the_ends_over_draw_sets():
+    """5.4.5.3's pivot ends value ∓ (quantile − mean) recomputed on 300 independent sets of
+    4000 draws: their spread is the numerical u the item states (within 15 %)."""
+    from gonio.specs.iec62047_20.items import floor_interval, floor_interval_numerical_u
+
+    rng = np.random.default_rng(20261203)
+    sets = 20.0 + 3.0 * rng.standard_gamma(9.0, size=(300, 4000)) / 3.0   # skewed, as a floor
+    ends = np.array([floor_interval(20.0, d) for d in sets])
+    spread = float(np.max(np.std(ends, axis=0, ddof=1)))
+    est = float(np.mean([floor_interval_numerical_u(d) for d in sets]))
+    assert abs(est / spread - 1.0) < 0.15, (est, spread)
+
+
+@pytest.mark.parametrize("clause", ["5.3.3.5", "5.4.5.3"])
+def test_monte_carlo_interval_is_stated_to_its_supported_digits(shared_demo, clause):
     res = json.loads((shared_demo("iec62047-20") / "results.json").read_text(encoding="utf-8"))
     items = res["items"] if isinstance(res["items"], list) else list(res["items"].values())
-    it = next(i for i in items if i.get("clause") == "5.3.3.5")
+    it = next(i for i in items if i.get("clause") == clause)
     unc = it["uncertainty"]
     s = unc["interval_numerical_u"]
     assert s > 0

@@ -1508,14 +1508,18 @@ def bias_instability(ctx: Context) -> Item:
     quantiles shifted to B̂ would put the long side where the estimate's tail is, not the
     truth's. u_c is the draws' standard deviation (JCGM 101 7.6; z, budget line). The
     standard's reading is kept in the details (``floor_reading_dph``) beside the value.
-    A value below 0 (a reading that is all other terms) is stated as 0, the bound."""
+    A value below 0 (a reading that is all other terms) is stated as 0, the bound. The
+    interval's digits: no finer than the draws settle (JCGM 101 7.9,
+    :func:`floor_interval_numerical_u`; :data:`BIAS_INSTABILITY_DRAWS` leave its ends about
+    0.03·u uncertain, within half a unit of the reach's first significant digit: a u of a
+    few °/h is stated to the unit)."""
     t, cl, un = "bias instability", "5.4.5.3", "°/h"
     m = _miss(ctx, "static", "bias_instability", t, cl, un) or _quiet(ctx, "bias_instability", t, cl, un)
     if m:
         return m
     allan = _static(ctx)[0]
     fit = _noise_fit(ctx)
-    val, i, value, u_b, slope, n_draws, (lo, hi) = floor_reading(allan, fit)
+    val, i, value, u_b, slope, n_draws, (lo, hi), num_u = floor_reading(allan, fit)
     u = gum(lambda r, e: r - e,
             [from_u("floor", val, u_b, source=f"spread of the floor rule: standard deviation "
                     f"of {n_draws} seeded draws under the five-term fit (correlated Allan "
@@ -1525,7 +1529,8 @@ def bias_instability(ctx: Context) -> Item:
                            "at the floor τ, minimum over τ)")])
     # one statement: the interval of the rule's own distribution (JCGM 101 7.7), no k, no ν
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
-                k_source="floor rule's distribution (pivot)", interval=(lo, hi))
+                k_source="floor rule's distribution (pivot)", interval=(lo, hi),
+                interval_numerical_u=num_u)
     return Item("bias_instability", t, cl, un, value, uncertainty=u, details={
         "tau_floor_s": float(allan.tau_s[i]), "fit": fit.to_dict(),
         "floor_reading_dph": val, "floor_rule_bias_dph": val - value,
@@ -1540,10 +1545,12 @@ def bias_instability(ctx: Context) -> Item:
 
 
 def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int,
-                                       tuple[float, float]]:
+                                       tuple[float, float], float]:
     """5.4.5.3 c) from an Allan deviation and the five-term fit of the same record: (the
     standard's reading R = floor/0.664, index of the floor τ, the value B̂, u(B̂), the slope
-    g' = dE*[B*]/dB, draws per evaluation, the 95 % interval (lo, hi)) (:func:`bias_instability`).
+    g' = dE*[B*]/dB, draws per evaluation, the 95 % interval (lo, hi), the interval ends'
+    numerical standard uncertainty from the finite draws, :func:`floor_interval_numerical_u`)
+    (:func:`bias_instability`).
 
     B̂ solves E*[B* | B] = R, E* the mean of :func:`floor_rule_draws` under the fit with its B
     replaced: a first step B₁ = R − (E*[B* | R] − R), then one secant step through (R, B₁)
@@ -1572,7 +1579,8 @@ def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int,
     slope = (g1 - g0) / (b1 - val) if abs(b1 - val) > 0.01 * u_f else 1.0
     slope = min(max(slope, BIAS_INSTABILITY_SLOPE_MIN), 1.0)
     b2 = max(b1 + (val - g1) / slope, 0.0)
-    return val, i, b2, u_f, slope, int(d1.size), floor_interval(b2, d1)
+    return val, i, b2, u_f, slope, int(d1.size), floor_interval(b2, d1), \
+        floor_interval_numerical_u(d1)
 
 
 def floor_interval(value: float, draws: np.ndarray, p: float = 0.95) -> tuple[float, float]:
@@ -1584,7 +1592,33 @@ def floor_interval(value: float, draws: np.ndarray, p: float = 0.95) -> tuple[fl
     return max(value - (q_hi - m), 0.0), value + (m - q_lo)
 
 
-BIAS_INSTABILITY_DRAWS = 4000
+def floor_interval_numerical_u(draws: np.ndarray, p: float = 0.95) -> float:
+    """The standard uncertainty of :func:`floor_interval`'s ends from the finite number of
+    draws (JCGM 101 7.9): each end is the value ∓ (a quantile − the draws' mean), so its
+    numerical u is √(u(quantile)² + u(mean)²), the quantile's from
+    :func:`uncertainty.quantile_numerical_u`, the mean's s/√M; the larger of the two ends.
+    It decides the decimal place the interval is stated at (no digit a rerun of the draws
+    would change; :func:`gonio.result.statement.state_interval`, as 5.3.3.5's
+    :func:`power_on_interval_numerical_u`).
+
+    >>> d = np.random.default_rng(0).normal(20.0, 3.0, 4000)
+    >>> round(floor_interval_numerical_u(d), 2)    # ≈ √(0.025·0.975/4000)/φ(1.96)·3 = 0.13
+    0.12
+    """
+    from uncertainty import quantile_numerical_u
+
+    d = np.asarray(draws, float)
+    q = (1.0 + p) / 2.0
+    s_q = quantile_numerical_u(d, [1.0 - q, q])
+    s_m = float(d.std(ddof=1)) / math.sqrt(d.size)
+    return float(np.sqrt(np.max(s_q) ** 2 + s_m ** 2))
+
+
+#: Draws of the floor rule per evaluation: enough that the interval's ends are settled at
+#: the reach's first significant digit whatever its size (JCGM 101 7.9.2, 2s ≤ δ: s ≈ 0.024
+#: of the reach at 25 000 draws; 4000 left 0.06, more than δ = 0.05·10^d where the reach is
+#: near 9·10^d), about 10 ms a call.
+BIAS_INSTABILITY_DRAWS = 25000
 BIAS_INSTABILITY_SEED = 6204720553      # fixed: the same records give the same value
 BIAS_INSTABILITY_CONTENDER = 1.5        # τ whose model deviation is ≤ 1.5× the least contend
 BIAS_INSTABILITY_SLOPE_MIN = 0.2        # g' floor: a reading almost all other terms
