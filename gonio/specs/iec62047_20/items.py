@@ -434,7 +434,8 @@ def noise_temperature_coefficient(ctx: Context) -> NoiseTemperatureCoefficient |
     states no noise coefficient; docs/iec62047-20-readings.md): the white level's
     coefficient stands for the noise items' (5.4.5.2 is the white level; 5.4.5.1 b), c)
     are mostly white on a rate gyro). None where the readings hold no visits at two
-    temperatures or no a_BASE: the noise items then carry the finding
+    stated temperatures (a visit whose temperature_c is not stated is left out) or no
+    a_BASE: the noise items then carry the finding
     (:func:`noise_temperature_finding`)."""
     key = ("noise_tc", ctx.a_base)
     if key in ctx.cache:
@@ -445,6 +446,8 @@ def noise_temperature_coefficient(ctx: Context) -> NoiseTemperatureCoefficient |
             if ctx.has("sf_temperature") else {}
         T, ln_s, var, nus = [], [], [], []
         for s in segment_means(ctx.df, "bias_temperature"):
+            if not math.isfinite(s.temperature_c):      # a visit at no stated temperature
+                continue
             y = segment_samples(ctx.df, "bias_temperature", s.run, s.step)["output"].to_numpy()
             d = np.diff(y.astype(float))
             d = d[np.isfinite(d)]
@@ -465,7 +468,8 @@ def noise_temperature_coefficient(ctx: Context) -> NoiseTemperatureCoefficient |
             parts = w * (T - tm) / sxx * np.sqrt(np.array(var))    # each visit's share of u(c)
             u = math.sqrt(1.0 / sxx)
             nu = welch_satterthwaite(u, list(parts), nus)
-            out = NoiseTemperatureCoefficient(c, u, nu, len(T))
+            if math.isfinite(c) and math.isfinite(u):
+                out = NoiseTemperatureCoefficient(c, u, nu, len(T))
     ctx.cache[key] = out
     return out
 
