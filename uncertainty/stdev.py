@@ -667,19 +667,32 @@ def _three_level_patterns(e: np.ndarray, outliers_only: bool) -> tuple[np.ndarra
 
 
 def _split_ranges(big_r: float, fam, rows: np.ndarray) -> np.ndarray:
-    """The draws' measured ranges (rows, M) of the two-level patterns ``rows`` at range R."""
+    """The draws' measured ranges (rows, M) of the two-level patterns ``rows`` at range R:
+    max(R + high max, low max) − min(R + high min, low min), evaluated in two buffers (the
+    same operations on the same numbers as the expression, without its three temporaries
+    of rows × M values: the belt's bisection asks for this hundreds of times)."""
     if rows.size and rows[-1] - rows[0] + 1 == rows.size:         # contiguous: a view
         rows = slice(int(rows[0]), int(rows[-1]) + 1)
-    return (np.maximum(big_r + fam[0][rows], fam[4][rows])
-            - np.minimum(big_r + fam[1][rows], fam[5][rows]))
+    top = np.add(fam[0][rows], big_r)
+    np.maximum(top, fam[4][rows], out=top)
+    bot = np.add(fam[1][rows], big_r)
+    np.minimum(bot, fam[5][rows], out=bot)
+    return np.subtract(top, bot, out=top)
 
 
 def _pair_ranges(big_r: float, fam, rows: np.ndarray) -> np.ndarray:
     """The same for the three-level patterns ``rows`` (one value high, one low, the rest
-    in the middle)."""
-    top, mid_max, mid_min, bot = fam[0][rows], fam[2][rows], fam[3][rows], fam[4][rows]
-    return (np.maximum(np.maximum(big_r + top, 0.5 * big_r + mid_max), bot)
-            - np.minimum(np.minimum(big_r + top, 0.5 * big_r + mid_min), bot))
+    in the middle): max(R + top, R/2 + middle max, bottom) − min(R + top, R/2 + middle min,
+    bottom), in three buffers (the same operations as the expression)."""
+    high = np.add(fam[0][rows], big_r)
+    bot = fam[4][rows]
+    top = np.add(fam[2][rows], 0.5 * big_r)
+    np.maximum(high, top, out=top)
+    np.maximum(top, bot, out=top)
+    low = np.add(fam[3][rows], 0.5 * big_r)
+    np.minimum(high, low, out=low)
+    np.minimum(low, bot, out=low)
+    return np.subtract(top, low, out=top)
 
 
 def _quantile_rows(a: np.ndarray, q: float):
