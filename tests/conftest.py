@@ -199,3 +199,32 @@ def shared_demo(shared_run):
         tag = "" if lab is None else "-lab" + hashlib.sha256(Path(lab).read_bytes()).hexdigest()[:16]
         return shared_run(f"demo-{spec}-{lang}-seed{seed}{tag}", make) / "out"
     return get
+
+
+@pytest.fixture(scope="session")
+def shared_simulation(shared_run):
+    """``shared_simulation(spec, protocol=None, seed=3) -> Path``: the folder ``gonio simulate
+    --spec SPEC [--protocol PROTOCOL] --seed SEED`` writes (readings, truth, the files they
+    name, the manifest), made once per session (:func:`shared_run`; a protocol file keyed by
+    its bytes). ``gonio simulate`` writes the same bytes into any folder, so a test that needs
+    the simulated set in its own folder copies it (:func:`shutil.copytree`) where it would
+    have simulated again; never write into the shared one."""
+    import contextlib
+    import hashlib
+    import io
+
+    def get(spec: str, protocol: Path | str | None = None, seed: int = 3) -> Path:
+        from gonio.cli import main
+
+        def make(folder: Path) -> None:
+            argv = ["simulate", "--spec", spec, "--seed", str(seed), "--out", str(folder / "sim")]
+            argv += [] if protocol is None else ["--protocol", str(protocol)]
+            err = io.StringIO()
+            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+                rc = main(argv)
+            assert rc == 0, f"gonio {' '.join(argv)}: exit {rc}: {err.getvalue()}"
+
+        tag = ("" if protocol is None else
+               "-proto" + hashlib.sha256(Path(protocol).read_bytes()).hexdigest()[:16])
+        return shared_run(f"simulate-{spec}-seed{seed}{tag}", make) / "sim"
+    return get

@@ -18,7 +18,7 @@ import sqlite3
 import pytest
 
 from gonio.cli import main
-from tests.test_provenance import LAB_SERIAL, PINS, RUNS, gonio, lab_file
+from tests.test_provenance import LAB_SERIAL, PINS, RUNS, gonio, lab_file, simulated
 
 
 def _calibrations(data) -> int:
@@ -38,11 +38,11 @@ def run_in_process(capsys, *args, rc: int = 0) -> str:
 
 @pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
 def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tmp_path,
-                                                        monkeypatch, capsys):
+                                                        monkeypatch, capsys, shared_simulation):
     monkeypatch.chdir(tmp_path)
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, data = tmp_path / "sim", tmp_path / "data"
-    run_in_process(capsys, "simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim)
+    simulated(shared_simulation, spec, protocol, seed, sim)      # gonio simulate's set
     readings = sim / "readings.csv"
     run_in_process(capsys, "calibrate", readings, "--spec", spec, *proto, "--out",
                    tmp_path / "plain")

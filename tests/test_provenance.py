@@ -97,9 +97,18 @@ def printed_pages(page: Path) -> list[str]:
 LAB_OWN = "|".join(BENCH_KEYS)
 
 
+def simulated(sims, spec, protocol, seed, dst: Path) -> Path:
+    """``dst`` holding what ``gonio simulate --spec spec [--protocol PINS/protocol] --seed
+    seed`` writes, copied from the session's shared simulation (``sims``, the
+    ``shared_simulation`` fixture of tests/conftest.py: the same bytes in any folder)."""
+    shutil.copytree(sims(spec, None if protocol is None else PINS / protocol, seed), dst)
+    return dst
+
+
 def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "",
-                       unmark: bool = True, resave: bool = False) -> Path:
-    """``gonio simulate`` then ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
+                       unmark: bool = True, resave: bool = False, sims=None) -> Path:
+    """``gonio simulate`` (copied from ``sims`` where given, :func:`simulated`) then
+    ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
     expression of metadata keys whose lines are deleted from the readings first
     (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`, its
     values without the bench's watermark unless ``unmark`` is False: then the header lines
@@ -108,7 +117,10 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
     (:func:`tests.own_readings.resaved`: ``60.0`` → ``60``, 15 significant digits)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
-    gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
+    if sims is None:
+        gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
+    else:
+        simulated(sims, spec, protocol, seed, sim)
     readings = sim / "readings.csv"
     if strip:                        # a laboratory's own file: no bench, seed or generator
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
@@ -129,13 +141,14 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
 
 
 @pytest.fixture(scope="module", params=RUNS, ids=[r[0] for r in RUNS])
-def run(request, tmp_path_factory):
+def run(request, tmp_path_factory, shared_simulation):
     """Simulated readings calibrated with a laboratory file that names another serial and
     proceeds (``on_mismatch = "proceed"``)."""
     spec, protocol, seed = request.param
     work = tmp_path_factory.mktemp(spec)
     lab = lab_file(work, 'on_mismatch = "proceed"')
-    return spec, seed, simulate_calibrate(spec, protocol, seed, work, lab)
+    return spec, seed, simulate_calibrate(spec, protocol, seed, work, lab,
+                                          sims=shared_simulation)
 
 
 def test_contradicting_lab_file_is_refused(run):
@@ -284,10 +297,11 @@ def test_virtual_readings_marked_everywhere_with_a_lab_file(run):
     assert 'id="virtual-bench"' in dcc and prov["bench"] in dcc
 
 
-def test_laboratory_readings_are_not_marked(tmp_path):
+def test_laboratory_readings_are_not_marked(tmp_path, shared_simulation):
     """The same simulated readings less the bench's metadata lines and names: no mark anywhere."""
     cal = simulate_calibrate("jjf1535-2015", "jjf1535-2015-small.toml", 3, tmp_path,
-                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN)
+                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN,
+                             sims=shared_simulation)
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
     assert res["provenance"]["virtual"] is False
     assert not any(BANNER in t for t in pdf_pages(cal / "certificate.pdf"))
@@ -297,7 +311,8 @@ def test_laboratory_readings_are_not_marked(tmp_path):
 
 
 @pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
-def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, tmp_path):
+def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, tmp_path,
+                                                          shared_simulation):
     """Simulated readings with every metadata line that names the bench deleted (bench, seed,
     generator, noise) and every "virtual" name replaced, the file renamed and re-saved as a
     spreadsheet does ('%.15g' of every number: 60.0 → 60): the values' own watermark
@@ -305,7 +320,7 @@ def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, t
     summary.txt, results.json and the DCC, for every specification."""
     cal = simulate_calibrate(spec, protocol, seed, tmp_path,
                              lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN,
-                             unmark=False, resave=True)
+                             unmark=False, resave=True, sims=shared_simulation)
     lab_readings = (tmp_path / "lab-readings.csv").read_text(encoding="utf-8")
     assert not re.search(r"(?im)^# (bench|seed|generator|noise):|virtual", lab_readings)
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
@@ -329,14 +344,15 @@ def test_watermark_keeps_the_mark_without_any_bench_line(spec, protocol, seed, t
 
 @pytest.mark.parametrize("spec, protocol", [("jjf1535-2015", "jjf1535-2015-small.toml"),
                                             ("triad-alignment", None)])
-def test_deleting_bench_and_seed_lines_keeps_the_mark(spec, protocol, tmp_path):
+def test_deleting_bench_and_seed_lines_keeps_the_mark(spec, protocol, tmp_path,
+                                                       shared_simulation):
     """Simulated readings whose ``# bench:``, ``# seed:`` (and ``# generator:``) lines were
     deleted still name the virtual bench in their other metadata (the instrument "… (virtual)"):
     marked on every PDF page, in the HTML, summary.txt, results.json and the DCC, naming the
     keys that said so."""
     cal = simulate_calibrate(spec, protocol, 3, tmp_path,
                              lab_file(tmp_path, 'on_mismatch = "proceed"'),
-                             strip="bench|seed|generator")
+                             strip="bench|seed|generator", sims=shared_simulation)
     prov = json.loads((cal / "results.json").read_text(encoding="utf-8"))["provenance"]
     assert prov["virtual"] is True and prov["bench"] is None and "instrument" in prov["evidence"]
     pages = pdf_pages(cal / "certificate.pdf")
@@ -443,13 +459,12 @@ def test_first_page_flags_the_contradicted_identity(run, run_zh):
     assert f'{LAB_SERIAL}</span><span class="flag">{zh["identity_flag"]}</span>' in page
 
 
-def test_the_flag_follows_what_is_contradicted(tmp_path):
+def test_the_flag_follows_what_is_contradicted(tmp_path, shared_simulation):
     """A laboratory file with the readings' own serial and a temperature 5 °C off, proceeding:
     the temperature line is flagged, the serial is not (the flag follows the finding)."""
     from gonio.formats.provenance import readings_metadata
 
-    gonio("simulate", "--spec", "jjf1535-2015", "--protocol", PINS / "jjf1535-2015-small.toml",
-          "--seed", 3, "--out", tmp_path / "sim", cwd=tmp_path)
+    simulated(shared_simulation, "jjf1535-2015", "jjf1535-2015-small.toml", 3, tmp_path / "sim")
     md = readings_metadata(tmp_path / "sim" / "readings.csv")
     t = float(md.get("temperature_c") or md["room_temperature_c"])
     lab = lab_file(tmp_path, 'on_mismatch = "proceed"', name="warm.toml", temperature_c=t + 5)

@@ -28,7 +28,7 @@ from gonio.formats.lab import load_lab
 from gonio.result.findings import Finding
 from gonio.result.model import Result
 from gonio.specs import get
-from tests.test_provenance import lab_file
+from tests.test_provenance import lab_file, simulated
 
 PINS = Path(__file__).resolve().parent / "data" / "pins"
 #: (specification, a small protocol of tests/data/pins or None, the metadata key written,
@@ -47,13 +47,12 @@ DCC_NS = {"dcc": "https://ptb.de/dcc", "si": "https://ptb.de/si"}
 
 
 @pytest.fixture(scope="module", params=CASES, ids=[c[0] for c in CASES])
-def calibrated(request, tmp_path_factory):
+def calibrated(request, tmp_path_factory, shared_simulation):
     """(spec, room?, the readings' room_temperature_c text, lab path, calibrate's folder)."""
     spec, protocol, key, is_room = request.param
     work = tmp_path_factory.mktemp(spec)
     proto = [] if protocol is None else ["--protocol", str(PINS / protocol)]
-    assert main(["simulate", "--spec", spec, *proto, "--seed", "3",
-                 "--out", str(work / "sim")]) == 0
+    simulated(shared_simulation, spec, protocol, 3, work / "sim")     # gonio simulate's set
     text = (work / "sim" / "readings.csv").read_text(encoding="utf-8")
     m = re.search(r"(?m)^# (?:room_)?temperature_c: *(\S+)$", text)
     value = m.group(1) if m else ADDED_C

@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from tests.test_provenance import PINS, RUNS, gonio, pdf_pages
+from tests.test_provenance import PINS, RUNS, gonio, pdf_pages, simulated
 
 
 def renamed(src, dst, new: str) -> None:
@@ -30,10 +30,10 @@ def renamed(src, dst, new: str) -> None:
 
 
 @pytest.mark.parametrize("spec, protocol, seed", RUNS, ids=[r[0] for r in RUNS])
-def test_a_misspelt_or_unread_temperature_column(spec, protocol, seed, tmp_path):
+def test_a_misspelt_or_unread_temperature_column(spec, protocol, seed, tmp_path,
+                                                 shared_simulation):
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
-    sim = tmp_path / "sim"
-    gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=tmp_path)
+    sim = simulated(shared_simulation, spec, protocol, seed, tmp_path / "sim")
     for name in ("temprature_c", "temperature", "temp_c"):
         readings = sim / f"{name}.csv"
         renamed(sim / "readings.csv", readings, name)

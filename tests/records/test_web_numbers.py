@@ -369,7 +369,8 @@ def test_issued_certificate_page_and_files_say_virtual(recorded, tmp_path):
 @pytest.mark.parametrize("spec, protocol, seed", [r for r in __import__(
     "tests.test_provenance", fromlist=["RUNS"]).RUNS], ids=SPECS)
 def test_a_contradiction_the_lab_proceeded_with_is_flagged_on_the_page(spec, protocol, seed,
-                                                                       tmp_path):
+                                                                       tmp_path,
+                                                                       shared_simulation):
     """Simulated readings calibrated on the command line with a laboratory file naming another
     serial and proceeding, then put into the records (gonio db import --lab): the calibration
     page states the contradiction, naming both serials, and says virtual."""
@@ -379,7 +380,7 @@ def test_a_contradiction_the_lab_proceeded_with_is_flagged_on_the_page(spec, pro
     from tests.test_provenance import LAB_SERIAL, PINS, lab_file, simulate_calibrate
 
     lab = lab_file(tmp_path, 'on_mismatch = "proceed"')
-    cal = simulate_calibrate(spec, protocol, seed, tmp_path, lab)
+    cal = simulate_calibrate(spec, protocol, seed, tmp_path, lab, sims=shared_simulation)
     readings = tmp_path / "sim" / "readings.csv"
     serial = readings_metadata(readings)["serial"]
     store = open_store(None, tmp_path / "data")
