@@ -33,11 +33,10 @@ def gonio(*args, cwd) -> subprocess.CompletedProcess:
 
 
 @pytest.fixture(scope="module")
-def triad(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("triad-named")
-    r = gonio("simulate", "--spec", "triad-alignment", "--seed", "3", "--out", d / "s", cwd=d)
-    assert r.returncode == 0, r.stderr
-    return d / "s"
+def triad(shared_simulation) -> Path:
+    """What ``gonio simulate --spec triad-alignment --seed 3`` writes (the session's shared
+    set: read only, :func:`copy_of` before any change)."""
+    return shared_simulation("triad-alignment", None, 3)
 
 
 def copy_of(src: Path, dst: Path, *, readings=None, thermal=None) -> Path:
