@@ -175,26 +175,33 @@ def shared_run(tmp_path_factory):
     assert not changed, f"shared runs changed by a test (copy before writing): {changed}"
 
 
+def _gonio_in_process(argv: list[str]) -> None:
+    """``gonio ARGV`` through :func:`gonio.cli.main` in this process, its output kept quiet;
+    exit 0 asserted (stderr shown otherwise)."""
+    import contextlib
+    import io
+
+    from gonio.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(argv)
+    assert rc == 0, f"gonio {' '.join(argv)}: exit {rc}: {err.getvalue()}"
+
+
 @pytest.fixture(scope="session")
 def shared_demo(shared_run):
     """``shared_demo(spec, lang="en", seed=0, lab=None) -> Path``: the folder ``gonio demo
     --spec SPEC --lang LANG --seed SEED [--lab LAB]`` writes (readings, truth, results,
     certificate, DCC), made once per session (:func:`shared_run`; a laboratory file is keyed
     by its bytes): read it, never write into it."""
-    import contextlib
     import hashlib
-    import io
 
     def get(spec: str, lang: str = "en", seed: int = 0, lab: Path | str | None = None) -> Path:
-        from gonio.cli import main
-
         def make(folder: Path) -> None:
-            argv = ["demo", "--spec", spec, "--lang", lang, "--seed", str(seed),
-                    "--out", str(folder / "out")] + ([] if lab is None else ["--lab", str(lab)])
-            err = io.StringIO()
-            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-                rc = main(argv)
-            assert rc == 0, f"gonio {' '.join(argv)}: exit {rc}: {err.getvalue()}"
+            _gonio_in_process(["demo", "--spec", spec, "--lang", lang, "--seed", str(seed),
+                               "--out", str(folder / "out")]
+                              + ([] if lab is None else ["--lab", str(lab)]))
 
         tag = "" if lab is None else "-lab" + hashlib.sha256(Path(lab).read_bytes()).hexdigest()[:16]
         return shared_run(f"demo-{spec}-{lang}-seed{seed}{tag}", make) / "out"
@@ -209,20 +216,13 @@ def shared_simulation(shared_run):
     its bytes). ``gonio simulate`` writes the same bytes into any folder, so a test that needs
     the simulated set in its own folder copies it (:func:`shutil.copytree`) where it would
     have simulated again; never write into the shared one."""
-    import contextlib
     import hashlib
-    import io
 
     def get(spec: str, protocol: Path | str | None = None, seed: int = 3) -> Path:
-        from gonio.cli import main
-
         def make(folder: Path) -> None:
-            argv = ["simulate", "--spec", spec, "--seed", str(seed), "--out", str(folder / "sim")]
-            argv += [] if protocol is None else ["--protocol", str(protocol)]
-            err = io.StringIO()
-            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-                rc = main(argv)
-            assert rc == 0, f"gonio {' '.join(argv)}: exit {rc}: {err.getvalue()}"
+            _gonio_in_process(["simulate", "--spec", spec, "--seed", str(seed),
+                               "--out", str(folder / "sim")]
+                              + ([] if protocol is None else ["--protocol", str(protocol)]))
 
         tag = ("" if protocol is None else
                "-proto" + hashlib.sha256(Path(protocol).read_bytes()).hexdigest()[:16])

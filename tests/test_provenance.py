@@ -106,8 +106,8 @@ def simulated(sims, spec, protocol, seed, dst: Path) -> Path:
 
 
 def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "",
-                       unmark: bool = True, resave: bool = False, sims=None) -> Path:
-    """``gonio simulate`` (copied from ``sims`` where given, :func:`simulated`) then
+                       unmark: bool = True, resave: bool = False, *, sims) -> Path:
+    """``gonio simulate``'s set (copied from ``sims``, :func:`simulated`) then
     ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
     expression of metadata keys whose lines are deleted from the readings first
     (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`, its
@@ -117,10 +117,7 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
     (:func:`tests.own_readings.resaved`: ``60.0`` → ``60``, 15 significant digits)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
-    if sims is None:
-        gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
-    else:
-        simulated(sims, spec, protocol, seed, sim)
+    simulated(sims, spec, protocol, seed, sim)
     readings = sim / "readings.csv"
     if strip:                        # a laboratory's own file: no bench, seed or generator
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)

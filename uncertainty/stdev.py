@@ -683,13 +683,17 @@ def _split_ranges(big_r: float, fam, rows: np.ndarray) -> np.ndarray:
 def _pair_ranges(big_r: float, fam, rows: np.ndarray) -> np.ndarray:
     """The same for the three-level patterns ``rows`` (one value high, one low, the rest
     in the middle): max(R + top, R/2 + middle max, bottom) − min(R + top, R/2 + middle min,
-    bottom), in three buffers (the same operations as the expression)."""
-    high = np.add(fam[0][rows], big_r)
+    bottom), in the three gathered copies (``np.take``, always new arrays; the same
+    operations as the expression)."""
+    high = np.take(fam[0], rows, axis=0)
+    high += big_r
     bot = fam[4][rows]
-    top = np.add(fam[2][rows], 0.5 * big_r)
+    top = np.take(fam[2], rows, axis=0)
+    top += 0.5 * big_r
     np.maximum(high, top, out=top)
     np.maximum(top, bot, out=top)
-    low = np.add(fam[3][rows], 0.5 * big_r)
+    low = np.take(fam[3], rows, axis=0)
+    low += 0.5 * big_r
     np.minimum(high, low, out=low)
     np.minimum(low, bot, out=low)
     return np.subtract(top, low, out=top)
