@@ -247,3 +247,24 @@ def test_the_cli_refuses_a_guard_factor_below_one(tmp_path, capsys):
                "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1 and "guard_band_factor" in err, err
+
+
+@pytest.mark.parametrize("r, T_U, want", [
+    # stated 1.808, ≤ 1.833: U = the limit's reach above the estimate, 0.025 (a + R), as a χ²
+    # bound's; guarded passes where 1.833 ≤ T_U − (r − 1)·0.025
+    (1.0, 1.833, "pass"), (1.0, 1.832, "fail"),
+    (2.0, 1.858, "pass"), (2.0, 1.857, "fail"),
+])
+def test_a_dispersions_one_sided_bound_condition_is_guarded_by_its_reach(r, T_U, want):
+    """A noise item stated by its one-sided bound condition [0, (s + R)/(1 − g)]
+    (gonio.result.statement.K_SOURCE_BOUND_CHI2): the guard band's U is the printed limit's
+    reach above the printed estimate (not the interval's half-width, 0.92, which would make
+    any guarded decision fail), and no probability of a normal or χ² model is claimed."""
+    from gonio.result.statement import K_SOURCE_BOUND_CHI2
+
+    (c,) = decide_items(interval_result(1.808, 0.0, 1.8326, K_SOURCE_BOUND_CHI2, 18264.2),
+                        [{"item": "C", "upper": T_U}],
+                        {"rule": "guarded", "guard_band_factor": r})
+    assert c.outcome == want, c
+    assert c.U == pytest.approx(0.025) and c.guard_band == pytest.approx(r * 0.025)
+    assert c.false_accept_probability is None

@@ -1,6 +1,7 @@
 """A noise rms is a dispersion and is stated as one: IEC 62047-20 5.4.5.1 b) in-band and
 c) broadband rms by the one-sided χ² 95 % interval of :func:`gonio.kit.dispersion_uncertainty`
-(ν = ½(rms/u_c)², no k, no "± U"), as JJF's B_s; IEC 5.3.3.4's half range by the normal
+(ν = ½(rms/u_c)², no k, no "± U"), as JJF's B_s, beyond the bound of the gyro's temperature
+during the static record where the 5.3.3.6 visits give its coefficient; IEC 5.3.3.4's half range by the normal
 range's interval with no k and no ν. Checked against scipy.stats.chi2 and a Monte Carlo of
 white-noise records whose true band rms is known in closed form."""
 
@@ -106,20 +107,30 @@ _IEC_DATA: dict = {}
 
 
 @pytest.mark.parametrize("key", ["inband_noise", "broadband_noise", "arw"])
-def test_iec_noise_rms_stated_by_chi2_interval(iec_noisy, key):
-    """The item's one statement is [0, rms·√(ν/χ²_0.05,ν)], ν = ½(rms/u_c)² from its own
-    budget (scipy.stats.chi2); no k; the bench's true rms lies below the upper end. The same
-    for 5.4.5.2's ARW (N = σ(τ)·√τ, a dispersion too; its line's edf in the budget)."""
+def test_iec_noise_rms_stated_by_its_one_sided_limit(iec_noisy, key):
+    """The item's one statement is the χ² upper limit of its lines other than the gyro's
+    temperature during the static record, rms·√(ν/χ²_0.05,ν), ν = ½(rms/u_rest)² (scipy.stats
+    .chi2), divided by 1 − g, g that temperature's bound relative error (the one-sided bound
+    condition; its g is checked against the 5.3.3.6 coefficient in test_rate_bound_u_c);
+    no k; the bench's true rms lies below the upper end. The same for 5.4.5.2's ARW
+    (N = σ(τ)·√τ, a dispersion too; its line's edf in the budget)."""
     result, truth = iec_noisy
     it = result.items[key]
     u = it.uncertainty
-    nu, hi = _chi2_upper(it.value, u.u_c)
-    assert u.k is None and u.k_source == "chi-square"
+    rows = {c["symbol"]: c for c in u.components}
+    assert "dT_noise" in rows
+    u_rest = math.sqrt(sum(c["contribution"] ** 2 for k, c in rows.items() if k != "dT_noise"))
+    nu, hi = _chi2_upper(it.value, u_rest)
+    g = it.details["bound_condition"]["g_rel"]["dT_noise"]
+    assert 0 < g < 0.05
+    assert u.k is None and u.k_source == "U = a + R: [0, (s + R)/(1 − g)]"
     assert u.nu_eff == pytest.approx(nu, rel=1e-12)
-    assert u.interval == (0.0, pytest.approx(hi, rel=1e-10))
+    assert u.interval == (0.0, pytest.approx(hi / (1.0 - g), rel=1e-10))
     assert truth[key]["value"] <= u.interval[1]
     st = item_statement(it, nonnegative=True)
     assert st.U is None and st.k is None and st.upper is not None and " ± " not in st.text()
+    # ν stated: the rest's, as the limit was computed with it
+    assert st.nu_eff == str(max(1, math.floor(nu)))
 
 
 def test_iec_broadband_row_nu_is_the_one_its_u_implies(iec_noisy):

@@ -281,8 +281,9 @@ def test_items_csv_states_the_certificates_numbers(demo):
             assert row["value"] == pytest.approx(stated_value(it)) or (
                 pd.isna(row["value"]) and it["value"] < 0), key
             nu = u["nu_eff"]
-            # a χ² interval's ν: the one its limit is computed with, never ∞
-            chi2 = u.get("k_source") == "chi-square"
+            # a χ² interval's ν (also the χ² reach of a dispersion's one-sided bound
+            # condition): the one its limit is computed with, never ∞
+            chi2 = u.get("k_source") in ("chi-square", "U = a + R: [0, (s + R)/(1 − g)]")
             assert (pd.isna(row["nu"]) if nu is None else
                     row["nu"] == (math.inf if nu > 1000 and not chi2
                                   else max(1, math.floor(nu)))), key

@@ -32,15 +32,19 @@ from gonio.report.dcc import DCC_NS, SI_NS
 
 PINS = Path(__file__).resolve().parent / "data" / "pins"
 NS = {"dcc": DCC_NS, "si": SI_NS}
-#: the items into which the rate table's relative error enters (JJF 7.2.1, IEC 5.1.3.1, 5.1.3.2)
+#: the items stated by a bound condition: those into which the rate table's relative error
+#: enters (JJF 7.2.1, IEC 5.1.3.1, 5.1.3.2), IEC's bias items (5.3.3.1, 5.3.3.2) and IEC's noise
+#: items (5.4.5.2, 5.4.5.1 b), c): the gyro's temperature during the static record, one-sided)
+NOISE_ITEMS = {"arw", "inband_noise", "broadband_noise"}
 BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"},
                "iec62047-20": {"scale_factor", "initial_sf_variation", "bias",
-                               "initial_bias_variation"}}
+                               "initial_bias_variation"} | NOISE_ITEMS}
 #: The bounded lines of each bound item (IEC 5.3.3.1/5.3.3.2: the gyro's temperature error at
 #: T_BASE, the input axis's misalignment on the Earth rate, a_BASE's bounded part).
 BOUND_LINES = {"scale_factor": {"e_table", "e_TU"}, "initial_sf_variation": {"e_table", "e_TU"},
                "bias": {"e_TU", "e_align", "e_a_bnd"},
-               "initial_bias_variation": {"e_TU", "e_align", "e_a_bnd"}}
+               "initial_bias_variation": {"e_TU", "e_align", "e_a_bnd"},
+               **{k: {"dT_noise"} for k in NOISE_ITEMS}}
 
 
 def gonio(*args, cwd: Path) -> None:
@@ -161,6 +165,13 @@ def test_legend_names_each_items_bounded_lines(cal):
                 "factor's bounded part)") in page
         assert ("（5.1.3.1, 5.1.3.2：转台误差、陀螺在设定点的温度误差；5.3.3.1, 5.3.3.2：陀螺在设定点的"
                 "温度误差、输入轴对准误差对地球自转角速度的影响、标度因数的有界部分）") in zh
+        # the noise items: their own kind, the one-sided limit, with their bounded line
+        assert ("one-sided bound-condition limit [0, (s + R)/(1 − g)] = [0, s + a + R]"
+                in page)
+        assert ("(5.4.5.1 b), 5.4.5.1 c), 5.4.5.2: the gyro's temperature during the static "
+                "record × the noise's temperature coefficient)") in page
+        assert "单侧界限条件上限 [0, (s + R)/(1 − g)]" in zh
+        assert "（5.4.5.1 b）, 5.4.5.1 c）, 5.4.5.2：静态记录期间陀螺的温度误差 × 噪声的温度系数）" in zh
     assert "chamber's temperature error" not in page and "温箱温度误差）给出" not in zh
 
 
@@ -243,7 +254,7 @@ def test_zh_dcc_names_the_interval_quantity_whole(cal):
     interval): the clause kept in both, the interval's "界限条件区间" and its p in the
     second — not the item's bare title for both (a title is a whole text, never the opening
     words of a longer one)."""
-    from gonio.report.dcc import BOUND_INTERVAL
+    from gonio.report.dcc import bound_interval_text
     from gonio.report.rate_certificate import dcc_translator
     from gonio.result.model import Result
 
@@ -253,11 +264,14 @@ def test_zh_dcc_names_the_interval_quantity_whole(cal):
     for key in BOUND_ITEMS[cal["spec"]]:
         it = res["items"][key]
         name = f"{it['title']} ({cal['spec']} {it['clause']})"
-        interval = f"{name}: {BOUND_INTERVAL}; p = 95 %"
+        interval = f"{name}: {bound_interval_text(it)}; p = 95 %"
         assert name in texts and interval in texts, (name, texts)
         zh_name, zh_interval = translate(name), translate(interval)
         assert f"（{it['clause']}）" in zh_name and zh_name != zh_interval, zh_name
-        assert zh_interval.startswith(zh_name) and "界限条件区间" in zh_interval, zh_interval
+        # a dispersion's one-sided limit [0, s + a + R], every other item's value ± (a + k·u)
+        kind = "单侧界限条件上限" if key in NOISE_ITEMS else "界限条件区间"
+        assert zh_interval.startswith(zh_name) and kind in zh_interval, zh_interval
+        assert ("[0, s + a + R]" in zh_interval) == (key in NOISE_ITEMS), zh_interval
         assert zh_interval.endswith("p = 95 %"), zh_interval
 
 
@@ -302,6 +316,9 @@ def test_iec_noise_items_carry_the_gyro_s_temperature_at_the_static_record(tmp_p
         assert len(line) == 1, it["uncertainty"]["components"]
         c_rms = (tc["value"] ** 2 + tc["u"] ** 2) ** 0.5
         assert line[0]["u"] == pytest.approx(it["value"] * c_rms * dT / 3 ** 0.5, rel=1e-9)
+        # the statement: the one-sided bound condition [0, s + a + R], recomputed here from the
+        # coefficient's own 95 % reach, ΔT and the other lines (scipy's χ² quantile)
+        _check_noise_bound_statement(it, tc, dT)
     assert not [f for f in res["findings"] if f["code"] == "noise-temperature-not-bounded"]
 
     d = _run(tmp_path_factory, "iec62047-20", drop_test="bias_temperature")
@@ -310,6 +327,9 @@ def test_iec_noise_items_carry_the_gyro_s_temperature_at_the_static_record(tmp_p
     for key in keys:
         assert not [r for r in res["items"][key]["uncertainty"]["components"]
                     if r["symbol"] == "dT_noise"]
+        # no coefficient, no bound condition: the χ² statement of its lines
+        assert "bound_condition" not in res["items"][key]["details"]
+        assert res["items"][key]["uncertainty"]["k_source"] == "chi-square"
     found = [f for f in res["findings"] if f["code"] == "noise-temperature-not-bounded"]
     assert len(found) == 1 and found[0]["action"] == "flagged", res["findings"]
     msg = found[0]["message"]
@@ -324,6 +344,37 @@ def test_iec_noise_items_carry_the_gyro_s_temperature_at_the_static_record(tmp_p
     zh = finding_text(found[0], labels("zh"), PHRASES_ZH)
     assert "噪声项" in zh and "而非 T_BASE" in zh and "5.3.3.6" in zh
     assert not [w for w in WORD.findall(zh) if w not in WHITELIST | {"temperature_c"}], zh
+
+
+def _check_noise_bound_statement(it: dict, tc: dict, dT: float) -> None:
+    """A noise item's one statement against its definition, computed here: g =
+    (|c| + t_95(⌊ν_c⌋)·u(c))·ΔT (the coefficient's 95 % far end, the temperature at its bound:
+    the reading's relative error), u_rest the root sum square of the budget's other
+    contributions, ν_rest = ½(s/u_rest)² taken as its integer part,
+    R = s·(√(ν/χ²_{0.05,ν}) − 1), the interval [0, (s + R)/(1 − g)], no k, ν_eff ν_rest; the
+    χ² limit of the whole GUM budget (the line rectangular) would reach less."""
+    from scipy import stats
+
+    s, unc = it["value"], it["uncertainty"]
+    bc = it["details"]["bound_condition"]
+    # k of the coefficient's ν as stated (its integer part: gonio.result.statement.coverage_k)
+    g = (abs(tc["value"]) + stats.t.ppf(0.975, np.floor(tc["nu"])) * tc["u"]) * dT
+    assert bc["g_rel"]["dT_noise"] == pytest.approx(g, rel=1e-6) and set(bc["a_lines"]) == {
+        "dT_noise"}
+    assert bc["g"] == pytest.approx(g, rel=1e-6)
+    rest = [r["contribution"] for r in unc["components"] if r["symbol"] != "dT_noise"]
+    u_rest = float(np.sqrt(np.sum(np.square(rest))))
+    assert bc["u_rest"] == pytest.approx(u_rest, rel=1e-9)
+    nu = float(np.floor(0.5 * (s / u_rest) ** 2))
+    reach = s * (np.sqrt(nu / stats.chi2.ppf(0.05, nu)) - 1.0)
+    assert bc["reach_rest"] == pytest.approx(reach, rel=1e-9)
+    upper = (s + reach) / (1.0 - g)
+    assert unc["k"] is None and unc["interval"][0] == 0.0
+    assert unc["interval"][1] == pytest.approx(upper, rel=1e-6)
+    assert bc["a"] == pytest.approx(upper - s - reach, rel=1e-5)
+    assert unc["nu_eff"] == pytest.approx(0.5 * (s / u_rest) ** 2, rel=1e-9)
+    nu_all = float(np.floor(0.5 * (s / unc["u_c"]) ** 2))
+    assert unc["interval"][1] > s * np.sqrt(nu_all / stats.chi2.ppf(0.05, nu_all))
 
 
 def test_iec_without_its_bias_temperature_coefficient_names_the_bias_items(tmp_path_factory):

@@ -126,7 +126,10 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
                 assert lo <= iv[0] * factor and hi >= iv[1] * factor
                 assert hi == pytest.approx(iv[1] * factor, rel=0.05)
                 name = nxt.findtext("dcc:name/dcc:content", None, NS)
-                assert "bound-condition interval" in name and name.endswith(
+                # value ± (a + k·u), or a dispersion's one-sided [0, s + a + R]
+                kind = ("one-sided bound-condition limit" if unc["k_source"]
+                        == "U = a + R: [0, (s + R)/(1 − g)]" else "bound-condition interval")
+                assert kind in name and name.endswith(
                     f"p = {100 * unc['coverage_probability']:g} %"), name
                 continue
             lo, hi = (float(ci.find(f"si:interval{e}", NS).text) for e in ("Min", "Max"))

@@ -232,4 +232,4 @@ def test_validate_reports_both_cases(capsys):
     assert case_stream(spec, "typeb") == spec.coverage.stream != case_stream(spec, "worst")
     capsys.readouterr()
     assert main(["validate", "--spec", "iec62047-20", "--trials", "2", "--cases", "hot"]) == 2
-    assert "unknown case 'hot' of iec62047-20 (known: typeb, worst)" in capsys.readouterr().err
+    assert "unknown case 'hot' of iec62047-20 (known: typeb, worst, cold)" in capsys.readouterr().err

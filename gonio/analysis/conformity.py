@@ -55,8 +55,8 @@ from gonio.errors import GonioError
 from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interval,
                               check_one_limit_per_item, check_symmetric)
 from gonio.result.model import Conformity
-from gonio.result.statement import (decimals_for_sig, given_text, is_magnitude_statement,
-                                    item_statement, stated_nu, chi2_nu)
+from gonio.result.statement import (K_SOURCE_BOUND_CHI2, decimals_for_sig, given_text,
+                                    is_magnitude_statement, item_statement, stated_nu, chi2_nu)
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -612,10 +612,12 @@ def interval_guard_U(lo: Decimal, hi: Decimal, value: Decimal | None = None) -> 
     expanded uncertainty of the result as stated, and JCGM 106:2012 8.3.2 the acceptance
     interval [T_L + w, T_U − w] for the stated result: applied to that centre, r = 1 accepts
     exactly when the whole stated interval lies within the tolerance, and r > 1 moves each
-    end in by (r − 1)·U. A one-sided bound [0, b] of a non-negative quantity that is not a
-    χ² bound is the same rule with U = b/2. Being a function of the printed numbers alone,
-    the same printed interval always gets the same decision (an unprinted bias-corrected
-    estimate no longer enters).
+    end in by (r − 1)·U. A dispersion's one-sided bound-condition limit [0, s + a + R]
+    (:data:`gonio.result.statement.K_SOURCE_BOUND_CHI2`: a χ² reach beyond its bounded
+    lines) is a bound above its estimate as a χ² bound is: U = b − s. Any other one-sided
+    bound [0, b] of a non-negative quantity is the same rule as an interval, U = b/2. Being a
+    function of the printed numbers alone, the same printed interval always gets the same
+    decision (an unprinted bias-corrected estimate no longer enters).
 
     >>> interval_guard_U(Decimal("0.066"), Decimal("0.205"))
     Decimal('0.0695')
@@ -655,7 +657,10 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     v, lo, hi, dec, printed = stated_interval_of(it)
     chi2 = unc.k_source == "chi-square" and unc.nu_eff is not None and it.value > 0 \
         and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
-    U = interval_guard_U(lo, hi, v if chi2 else None)
+    # a dispersion's one-sided limit above its estimate (χ², or χ² beyond a bound condition):
+    # the guard band's U is the limit's reach above the estimate
+    reach = chi2 or (unc.k_source == K_SOURCE_BOUND_CHI2 and it.value > 0)
+    U = interval_guard_U(lo, hi, v if reach else None)
     r = Decimal(repr(float(rule.guard_factor)))
     T_L = None if bounds.lower is None or magnitude else Decimal(repr(float(bounds.lower)))
     T_U = None if bounds.upper is None else Decimal(repr(float(bounds.upper)))

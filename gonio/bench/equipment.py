@@ -385,6 +385,32 @@ def worst_equipment(eq: Equipment, seed: int, *, temperature_split_c: float,
         fixture=Fixture(-a if ky > 0 else a, -a if kx < 0 else a))
 
 
+def cold_equipment(eq: Equipment, seed: int, *,
+                   cross_axis: tuple[float, float] = (0.0, 0.0)) -> Equipment:
+    """:func:`worst_equipment` with the gyro COLD at every set point (the coverage studies'
+    ``cold`` case): the chamber's deviation at − ``chamber_deviation_bound_c`` and the gyro's
+    place at − half Table 2's uniformity at every set point, the static record's included,
+    and the chamber's fluctuation at the bench's own amplitude (Table 2's ±1 °C would add
+    output noise, the other way). The sign `worst` does not reach for the items read at one
+    temperature whose reading falls with it: the noise items' white level (IEC 62047-20
+    5.4.5), which a gyro cold during the static record reads low. Every other error as
+    :func:`worst_equipment` puts it (the table at Table 2's bound where no certificate u is
+    stated, the fixture, the ripple; the phases drawn). Same seed → same equipment.
+
+    >>> c = cold_equipment(Equipment(), 3)
+    >>> c.chamber.deviation_at(85.0), c.chamber.deviation_at(-40.0), c.chamber.position_at(25.0)
+    (-2.0, -2.0, -1.0)
+    >>> c.chamber.fluctuation_c == Equipment().chamber.fluctuation_c
+    True
+    """
+    w = worst_equipment(eq, seed, temperature_split_c=0.0, cross_axis=cross_axis)
+    half = 0.5 * w.chamber.uniformity_c
+    return replace(w, chamber=replace(
+        w.chamber, point_deviation_c=0.0, deviation_c=-float(eq.chamber_deviation_bound_c),
+        deviation_split_c=None, position_offset_c=-half, position_split_c=None,
+        fluctuation_c=eq.chamber.fluctuation_c))
+
+
 def equipment_from_dict(d: dict, file=None) -> Equipment:
     """Build :class:`Equipment` from a bench file's ``[equipment]`` table (every key checked)."""
     if not isinstance(d, dict):

@@ -309,7 +309,8 @@ class RateBench:
     #: seed (gonio.bench.equipment.draw_equipment) before it runs.
     draw_equipment: bool = False
     #: With ``draw_equipment``: ``"typeb"`` draws the type-B errors per trial, ``"worst"``
-    #: puts them at their bounds (gonio.bench.equipment.worst_equipment).
+    #: puts them at their bounds (gonio.bench.equipment.worst_equipment), ``"cold"`` as
+    #: ``"worst"`` with the gyro cold at every set point (gonio.bench.equipment.cold_equipment).
     equipment_case: str = "typeb"
 
     def for_trial(self, seed: int) -> "RateBench":
@@ -318,18 +319,22 @@ class RateBench:
         or, ``equipment_case == "worst"``, put at their bounds
         (:func:`gonio.bench.equipment.worst_equipment`: the chamber's deviation split at the
         gyro's reference temperature, the fixture's signs from its cross-axis
-        sensitivities); else this bench."""
+        sensitivities), ``"cold"`` the same with the gyro cold at every set point
+        (:func:`gonio.bench.equipment.cold_equipment`); else this bench."""
         if not self.draw_equipment:
             return self
-        from gonio.bench.equipment import draw_equipment, worst_equipment
+        from gonio.bench.equipment import cold_equipment, draw_equipment, worst_equipment
         if self.equipment_case == "worst":
             eq = worst_equipment(self.equipment, seed,
                                  temperature_split_c=self.gyro.reference_temperature_c,
                                  cross_axis=(self.gyro.cross_axis_x, self.gyro.cross_axis_y))
+        elif self.equipment_case == "cold":
+            eq = cold_equipment(self.equipment, seed,
+                                cross_axis=(self.gyro.cross_axis_x, self.gyro.cross_axis_y))
         elif self.equipment_case == "typeb":
             eq = draw_equipment(self.equipment, seed)
         else:
-            raise GonioError(f"unknown equipment case {self.equipment_case!r} (typeb, worst)")
+            raise GonioError(f"unknown equipment case {self.equipment_case!r} (typeb, worst, cold)")
         return replace(self, equipment=eq, draw_equipment=False)
 
     def without_noise(self) -> "RateBench":

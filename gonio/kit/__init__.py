@@ -17,7 +17,8 @@ Results and items               :class:`Result`, :class:`Item`,
 The item loop                   :class:`ItemDef`, :func:`calibrate_items`
 Uncertainty (GUM, Monte Carlo)  :func:`gum`, :func:`monte_carlo_validation`,
                                 :func:`std_dev_uncertainty`,
-                                :func:`dispersion_uncertainty`, :func:`from_u`,
+                                :func:`dispersion_uncertainty`,
+                                :func:`dispersion_bound_statement`, :func:`from_u`,
                                 :func:`type_a`, :func:`type_b`,
                                 :class:`InputQuantity`
 The statement rule              :func:`state`, :func:`item_statement`,
@@ -48,8 +49,8 @@ from gonio.analysis.noise import (AllanResult, allan_deviation, averaging_factor
 from gonio.errors import GonioError
 from gonio.kit.items import ItemDef, calibrate_items
 from gonio.result.findings import ACTIONS, Finding, set_aside
-from gonio.result.gum import (dispersion_uncertainty, gum, monte_carlo_validation,
-                              std_dev_uncertainty)
+from gonio.result.gum import (dispersion_bound_statement, dispersion_uncertainty, gum,
+                              monte_carlo_validation, std_dev_uncertainty)
 from gonio.result.items import item_order
 from gonio.result.model import (Covariance, Item, Result, Uncertainty, budget_row,
                                 not_measured)
@@ -63,7 +64,7 @@ __all__ = [
     "Finding", "GonioError", "ITEM_RENDERER", "InputQuantity", "Item", "ItemDef", "Result",
     "Specification", "Statement", "Uncertainty", "allan_deviation", "available",
     "averaging_factors", "budget_row", "calibrate_items", "chi2_interval", "coverage",
-    "dispersion_uncertainty",
+    "dispersion_bound_statement", "dispersion_uncertainty",
     "edf_for", "from_u", "get", "gum", "hadamard_deviation", "item_order", "item_statement",
     "lazy", "modified_allan_deviation", "monte_carlo_validation", "noise_id_lag1",
     "not_measured", "set_aside", "spawn_seed", "state", "std_dev_uncertainty",

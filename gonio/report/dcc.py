@@ -55,7 +55,7 @@ from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, finding_text, labels
 from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
-from gonio.result.statement import DSI_UNITS, p_text
+from gonio.result.statement import DSI_UNITS, K_SOURCE_BOUND_CHI2, p_text
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -170,6 +170,28 @@ BOUND_INTERVAL = ("bound-condition interval, value ± (a + k·u): the bounded er
                   "lines) at their bounds in their worst "
                   "combination, a, plus k·u of the other lines; no "
                   "standard uncertainty of the item is certified")
+
+#: what a dispersion's one-sided bound-condition limit is, in the DCC's words
+#: (:data:`gonio.result.statement.K_SOURCE_BOUND_CHI2`)
+BOUND_CHI2_INTERVAL = ("one-sided bound-condition limit, [0, s + a + R]: the bounded errors "
+                       "(the item's bounded lines) at their bounds with the sign that lowers "
+                       "the reading, a, plus the reach R of the one-sided chi-square limit of "
+                       "the other lines; no standard uncertainty of the item is certified")
+
+
+def bound_interval_text(item: dict) -> str:
+    """What a results.json item stated by its bound condition names its interval quantity in
+    the DCC: :data:`BOUND_CHI2_INTERVAL` for a dispersion's one-sided limit, else
+    :data:`BOUND_INTERVAL`.
+
+    >>> from gonio.result.statement import K_SOURCE_BOUND_CHI2
+    >>> bound_interval_text({"uncertainty": {"k_source": K_SOURCE_BOUND_CHI2}})[:16]
+    'one-sided bound-'
+    >>> bound_interval_text({"uncertainty": {"k_source": "bound condition"}})[:16]
+    'bound-condition '
+    """
+    ks = (item.get("uncertainty") or {}).get("k_source")
+    return BOUND_CHI2_INTERVAL if ks == K_SOURCE_BOUND_CHI2 else BOUND_INTERVAL
 
 
 #: The name of a non-negative item whose bias-corrected estimate fell below zero, written as

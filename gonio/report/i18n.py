@@ -224,6 +224,17 @@ LABELS: dict[str, dict[str, str]] = {
                    "zh": "受有界误差影响的量给出其界限条件区间 值 ± (a + k·u)：这些误差（该项的有界分量，列于"
                          "其条款之后；未列出者为转台误差）取其界限按最不利组合线性相加为 a，加上其他分量的 k·u"
                          "（所给 ν 为其他分量的），在界限内任一误差下成立"},
+    "k_iv_bound_chi2": {"en": "a dispersion (a noise rms s) whose reading bounded errors scale, "
+                              "by its one-sided bound-condition limit [0, (s + R)/(1 − g)] = "
+                              "[0, s + a + R]: those errors (named after its clause) at their "
+                              "bounds with the sign that lowers the reading, g, and R the reach "
+                              "of the one-sided χ² 95 % limit of its other lines (ν stated is "
+                              "theirs, ½(s/u_rest)²), which holds at every error within the "
+                              "bounds",
+                        "zh": "读数受有界误差按比例影响的离散量（噪声均方根 s）给出其单侧界限条件上限 "
+                              "[0, (s + R)/(1 − g)] = [0, s + a + R]：这些误差（列于其条款之后）取其界限"
+                              "并取使读数偏低的符号为 g，R 为其他分量单侧 χ² 95 % 上限的增量（所给 ν 为其他"
+                              "分量的，½(s/u_rest)²），在界限内任一误差下成立"},
     # a bounded line of a bound-condition item, by its budget symbol (details.bound_condition
     # .a_lines); the rate table's where the item names none
     "bound_line_e_table": {"en": "the rate table's error", "zh": "转台误差"},
@@ -233,6 +244,9 @@ LABELS: dict[str, dict[str, str]] = {
                            "zh": "输入轴对准误差对地球自转角速度的影响"},
     "bound_line_e_a_bnd": {"en": "the scale factor's bounded part",
                            "zh": "标度因数的有界部分"},
+    "bound_line_dT_noise": {"en": "the gyro's temperature during the static record × the noise's "
+                                  "temperature coefficient",
+                            "zh": "静态记录期间陀螺的温度误差 × 噪声的温度系数"},
     "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
                        "distribution (Monte Carlo, a folded normal, a pivot)",
                  "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},
@@ -732,6 +746,14 @@ _BOUND_INTERVAL_RE = (r"bound-condition interval, value ± \(a \+ k·u\): the bo
                       r"of the other lines; no standard uncertainty of the item is certified")
 _BOUND_INTERVAL_ZH = ("值 ± (a + k·u)：有界误差（未给出证书不确定度时的转台误差；该项的其他有界分量）"
                       "取其界限的最不利组合 a，加其他分量的 k·u；不给出该项的标准不确定度")
+#: gonio.report.dcc.BOUND_CHI2_INTERVAL the same way, and its Chinese.
+_BOUND_CHI2_INTERVAL_RE = (r"one-sided bound-condition limit, \[0, s \+ a \+ R\]: the bounded "
+                           r"errors \(the item's bounded lines\) at their bounds with the sign "
+                           r"that lowers the reading, a, plus the reach R of the one-sided "
+                           r"chi-square limit of the other lines; no standard uncertainty of the "
+                           r"item is certified")
+_BOUND_CHI2_INTERVAL_ZH = ("[0, s + a + R]：有界误差（该项的有界分量）取其界限并取使读数偏低的符号为 a，"
+                           "加其他分量单侧 χ² 上限的增量 R；不给出该项的标准不确定度")
 
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
@@ -756,6 +778,8 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      "{1}：各元素界限条件区间的上限，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
     (rf"(.+): {_BOUND_INTERVAL_RE}; p = (\S+) %",
      "{1}：界限条件区间，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
+    (rf"(.+): {_BOUND_CHI2_INTERVAL_RE}; p = (\S+) %",
+     "{1}：单侧界限条件上限，" + _BOUND_CHI2_INTERVAL_ZH + "；p = {2} %"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     # the parts of a per-item DCC's method after the specification's title ("<title>;
     # protocol …; readings <file> (SHA-256 …, n rows)": its bracket and each part translated

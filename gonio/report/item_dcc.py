@@ -28,6 +28,7 @@ import re
 
 from gonio.errors import GonioError
 from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, below_zero_quantity,
+                              bound_interval_text,
                               conformity_statements,
                               interval_quantity, stated_p,
                               element, environment_conditions, influence_conditions,
@@ -136,7 +137,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
         quantity(d, name, n["stated_value"], "", dsi=dsi,
                  ref_type="basic_measuredValue", **kw)
         if bound is not None:
-            interval_quantity(d, name, bound, dsi, float(p), BOUND_INTERVAL)
+            interval_quantity(d, name, bound, dsi, float(p), bound_interval_text(it))
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

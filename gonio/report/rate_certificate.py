@@ -136,12 +136,21 @@ def bound_condition_row(it: dict, src: str, n: dict) -> list:
     """The budget table's U row of an item stated by its bound condition (results.json
     ``details.bound_condition``, written by the specification's bound-condition statement):
     "U = a + k·u_rest: a = …, k = …, ν_eff = …, p = 95 %" and U, the k and ν those of the
-    other lines (the ν the results table prints beside the interval)."""
+    other lines (the ν the results table prints beside the interval); a dispersion's one-sided
+    bound condition (``reach_rest``, :func:`gonio.result.gum.dispersion_bound_statement`):
+    "U = a + R: g = …, a = …, u_rest = …, R = …, ν_eff = …, p = 95 %", g the bounded relative
+    error, R the one-sided χ² reach of the other lines."""
     d = f"{src}.details.bound_condition"
     bc = it["details"]["bound_condition"]
-    seg = ["U = a + k·u_rest: a = ", _num(bc["a"], f"{d}.a", "sig3"),
-           ", u_rest = ", _num(bc["u_rest"], f"{d}.u_rest", "sig3"),
-           ", k = ", _num(bc["k_rest"], f"{d}.k_rest", "k")]
+    if "reach_rest" in bc:
+        seg = ["U = a + R: g = ", _num(bc["g"], f"{d}.g", "sig3"),
+               ", a = ", _num(bc["a"], f"{d}.a", "sig3"),
+               ", u_rest = ", _num(bc["u_rest"], f"{d}.u_rest", "sig3"),
+               ", R = ", _num(bc["reach_rest"], f"{d}.reach_rest", "sig3")]
+    else:
+        seg = ["U = a + k·u_rest: a = ", _num(bc["a"], f"{d}.a", "sig3"),
+               ", u_rest = ", _num(bc["u_rest"], f"{d}.u_rest", "sig3"),
+               ", k = ", _num(bc["k_rest"], f"{d}.k_rest", "k")]
     if n["nu"] is not None:
         seg += [", ν_eff = ", n["nu"]]
     if n["p"] is not None:

@@ -45,7 +45,7 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, below_zero_quantity,
+from gonio.report.dcc import (administrative_data, below_zero_quantity, bound_interval_text,
                               conformity_statements,
                               element, environment_conditions, influence_conditions,
                               interval_quantity, measurement_result, new_document,
@@ -209,7 +209,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
                      description=_converted(st, it, key, factor) if conv else None, **kw)
             if bound is not None:
-                interval_quantity(data, name, bound, dsi, float(item_p(it)), BOUND_INTERVAL)
+                interval_quantity(data, name, bound, dsi, float(item_p(it)),
+                                  bound_interval_text(it))
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

@@ -27,8 +27,8 @@ from typing import Any
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
 from gonio.result.text import measured_clause
-from gonio.result.statement import (K_SOURCE_BOUND_PREFIX, K_SOURCE_CHI2,  # noqa: F401
-                                    K_SOURCE_MAX_ABS,
+from gonio.result.statement import (K_SOURCE_BOUND_CHI2, K_SOURCE_BOUND_PREFIX,  # noqa: F401
+                                    K_SOURCE_CHI2, K_SOURCE_MAX_ABS, chi2_stated_nu,
                                     K_SOURCE_SELECTED_MAX, K_SOURCE_SELECTED_MAX_BEFORE,
                                     decimals_for_sig, given_text, round_half_up,
                                     u_c_certified)
@@ -163,7 +163,12 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
 
 
 #: the kinds of interval an item can be stated by, in the legend's order
-INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "own", "upper")
+INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "bound_chi2", "own",
+                  "upper")
+
+#: The interval kinds of a bound condition (their clauses named with their bounded lines).
+BOUND_KINDS = ("bound", "bound_chi2")
+
 
 def interval_kind(item: dict) -> str | None:
     """Which kind of 95 % interval states a results.json item (:data:`INTERVAL_KINDS`), from
@@ -171,9 +176,10 @@ def interval_kind(item: dict) -> str | None:
     deviation's χ²), "range" (a half range's normal range), "belt" (a bias-corrected range's
     confidence belt), "max_abs" (the extreme of magnitudes max_i |x_i|), "sel_max" (the
     largest σ_i less its selection bias), "bound" (value ± (a + k·u): the equipment's errors
-    at their bounds plus k·u of the rest), "own" (its own distribution: Monte Carlo, folded
-    normal, pivot, outcome distribution), "upper" (a non-negative item's upper bound), or
-    None (value ± U, or not measured).
+    at their bounds plus k·u of the rest), "bound_chi2" (a dispersion's one-sided limit
+    [0, s + a + R]: its bounded lines at their bounds, a, plus the χ² reach R of the rest),
+    "own" (its own distribution: Monte Carlo, folded normal, pivot, outcome distribution),
+    "upper" (a non-negative item's upper bound), or None (value ± U, or not measured).
 
     >>> interval_kind({"measured": True, "value": 1.0, "uncertainty": {"k": None,
     ...     "interval": [0, 2], "k_source": "max-abs-interval"}})
@@ -189,6 +195,8 @@ def interval_kind(item: dict) -> str | None:
         return None
     if unc.get("k") is None and unc.get("interval") is not None:
         ks = unc.get("k_source") or ""
+        if ks == K_SOURCE_BOUND_CHI2:
+            return "bound_chi2"
         if ks.startswith(K_SOURCE_BOUND_PREFIX):
             return "bound"
         return {"chi-square": "chi2", "normal range": "range", "neyman-belt": "belt",
@@ -235,7 +243,7 @@ def interval_legend(items: dict, L: dict) -> str:
     for it in items.values():
         kind = interval_kind(it) if isinstance(it, dict) else None
         clause = conv(str(it.get("clause") or ""))
-        if kind == "bound" and clause:
+        if kind in BOUND_KINDS and clause:
             lines_of.setdefault(clause, bounded_lines_text(it, L))
         if kind and clause not in kinds.setdefault(kind, []):     # each clause once
             kinds[kind].append(clause)
@@ -244,7 +252,7 @@ def interval_legend(items: dict, L: dict) -> str:
 
     def clauses(k: str) -> str:   # the bound's clauses grouped by their bounded lines
         cs = [c for c in kinds[k] if c]
-        if k != "bound" or not any(lines_of.get(c) for c in cs):
+        if k not in BOUND_KINDS or not any(lines_of.get(c) for c in cs):
             return ", ".join(cs)
         groups: dict[str, list[str]] = {}
         for c in cs:
@@ -493,6 +501,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
             out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
     if st.nu_eff is not None and (st.U is not None or st.interval is not None):
         # a χ² interval's ν: the one it was computed with, never ∞ (display rule "nuchi2")
-        chi2 = (it.get("uncertainty") or {}).get("k_source") == K_SOURCE_CHI2
+        chi2 = chi2_stated_nu((it.get("uncertainty") or {}).get("k_source"))
         out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nuchi2" if chi2 else "nu")
     return out

@@ -146,6 +146,89 @@ def dispersion_uncertainty(s: float, u: Uncertainty, p: float = 0.95) -> Uncerta
                        interval=(0.0, s + U))
 
 
+#: What a dispersion stated by its one-sided bound condition keeps in
+#: ``details.bound_condition.basis`` (:func:`dispersion_bound_statement`).
+DISPERSION_BOUND_BASIS = (
+    "bound condition of a dispersion: the relative errors that scale the reading, each at its "
+    "bound g_i with the sign that lowers it, and the one-sided χ² limit of the other lines, "
+    "[0, (s + R)/∏(1 − g_i)], R = s·(√(ν_rest/χ²_{1−p,ν_rest}) − 1), ν_rest = ½(s/u_rest)² "
+    "(JCGM 100 4.3.7, E.4.3); holds at least p at every condition within the bounds, exactly "
+    "p at the bound")
+
+
+def dispersion_bound_statement(s: float, u: Uncertainty, bounded_rel: dict, p: float = 0.95,
+                               basis: str = DISPERSION_BOUND_BASIS) -> tuple[Uncertainty, dict]:
+    """The one statement of a dispersion ``s`` (a noise rms, an ARW) whose reading bounded
+    relative errors scale (``bounded_rel``: {budget symbol: g_i}, the reading is
+    σ·∏(1 − e_i) with |e_i| ≤ g_i < 1; IEC 62047-20 5.4.5's gyro temperature during the
+    static record, which Table 2's chamber lets sit at its bound for the whole record): its
+    one-sided bound-condition limit
+
+        [0, (s + R)/∏(1 − g_i)] = [0, s + a + R],  R = s·(√(ν_rest/χ²_{1−p,ν_rest}) − 1),
+
+    u_rest the root sum square of the budget's other lines, ν_rest = ½(s/u_rest)² (JCGM 100
+    E.4.3 read backwards, as :func:`dispersion_uncertainty` takes ν; stated as its integer
+    part, :func:`gonio.result.statement.chi2_nu`, and R computed from that stated ν). The
+    χ² limit of the rest holds the reading's own dispersion σ·∏(1 − e_i) below s + R with
+    p, and σ·∏(1 − e_i) ≥ σ·∏(1 − g_i) for every error within the bounds, so
+    P(σ ≤ (s + R)/∏(1 − g_i)) ≥ p there, = p at the bound (JCGM 100 4.3.7 for the bounds;
+    a root-sum-square line of a bounded error at its bound covers less: IEC 5.4.5.2 with the
+    gyro at the chamber's cold bound, 5 of 8 trials). a = (s + R)·(1/∏(1 − g_i) − 1), each
+    line's share (s + R)·g_i/(1 − g_i) in ``a_lines`` (a holds their cross products too), g =
+    1 − ∏(1 − g_i) the combined bound (the upper end is (s + R)/(1 − g)). No
+    k; U is the reach a + R above s (the guard band of the decision, as for a χ² bound); u_c
+    and the budget's rows are kept beside (the GUM budget, the bounded lines rectangular),
+    not stated (:func:`gonio.result.statement.u_c_certified`). ``bounded_rel`` empty or all
+    0, or no rest: :func:`dispersion_uncertainty` (the χ² statement), and no parts. Returns
+    the statement and its parts for the item's ``details.bound_condition``.
+
+    >>> from uncertainty import from_u, type_b
+    >>> ins = [from_u("N", 1.0, 0.01, dof=5000), type_b("dT", 0.0, 0.005, "rectangular")]
+    >>> g = gum(lambda n, t: n + t, ins)
+    >>> st, d = dispersion_bound_statement(1.0, g, {"dT": 0.008})
+    >>> d["nu_rest"], round(d["reach_rest"], 5), round(d["a"], 7), st.k, st.interval[0]
+    (5000.0, 0.01675, 0.0081996, None, 0.0)
+    >>> round(st.interval[1], 6) == round((1.0 + d["reach_rest"]) / (1 - 0.008), 6)
+    True
+    >>> round(std_upper_half_width(1.0, 5000), 5)    # the rest's χ² reach alone
+    0.01675
+    >>> dispersion_bound_statement(1.0, g, {})[0].k_source
+    'chi-square'
+    """
+    from gonio.errors import GonioError
+    from gonio.result.statement import K_SOURCE_BOUND_CHI2, chi2_nu
+
+    bounded = {sym: float(g) for sym, g in bounded_rel.items() if float(g) > 0.0}
+    if not bounded or not s > 0:
+        return dispersion_uncertainty(s, u, p), {}
+    rows = {str(c.get("symbol")): c for c in u.components}
+    missing = sorted(set(bounded) - set(rows))
+    if missing:
+        raise GonioError(f"bound-condition statement: budget has no line {missing[0]!r}")
+    big = sorted(sym for sym, g in bounded.items() if not g < 1.0)
+    if big:
+        raise GonioError(f"bound-condition statement: line {big[0]!r} bounds a relative error "
+                         f"of {bounded[big[0]]:g}, not below 1: the dispersion has no upper "
+                         f"limit")
+    u_rest = math.sqrt(sum(float(c.get("contribution") or 0.0) ** 2
+                           for sym, c in rows.items() if sym not in bounded))
+    if not u_rest > 0:
+        return dispersion_uncertainty(s, u, p), {}
+    nu_rest = 0.5 * (s / u_rest) ** 2
+    reach = std_upper_half_width(s, chi2_nu(nu_rest), p)
+    upper = (s + reach) / math.prod(1.0 - g for g in bounded.values())
+    a = upper - s - reach
+    a_lines = {sym: (s + reach) * g / (1.0 - g) for sym, g in bounded.items()}
+    parts = {"a": a, "a_lines": a_lines, "g_rel": bounded,
+             "g": 1.0 - math.prod(1.0 - g for g in bounded.values()), "u_rest": u_rest,
+             "nu_rest": nu_rest, "reach_rest": reach, "U": upper - s, "upper": upper,
+             "basis": basis}
+    return Uncertainty(u.components, u.u_c, upper - s, None, nu_rest, None, p,
+                       K_SOURCE_BOUND_CHI2, interval=(0.0, upper),
+                       u_c_of="the GUM budget (the bounded lines as rectangular "
+                              "distributions); the bound-condition limit is the statement"), parts
+
+
 def budget_nu(u: Uncertainty) -> float:
     """ν_eff of the combined standard uncertainty u_c of ``u``'s budget, by
     Welch–Satterthwaite over its lines (JCGM 100 G.4.1, eq. (G.2b): u_c⁴ / Σ u_i(y)⁴/ν_i,

@@ -854,7 +854,8 @@ def u_c_certified(it) -> bool:
     ``tables/items.csv`` follows: not for a quantity stated by a
     bound-condition interval — ``details.bound_condition``, or ``uncertainty.k_source``
     "U = a + k·u" (value ± (a + k·u): the equipment's errors at their bounds, a, plus k·u of
-    the other lines), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
+    the other lines) or :data:`K_SOURCE_BOUND_CHI2` (a dispersion's one-sided bound
+    condition), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
     Its u_c (the JCGM 100 budget, the bounded lines as rectangular distributions) does not
     hold those errors at their bounds: it is kept in results.json and shown in the budget
     table marked "beside, not stated"; the DCC writes the interval's ends without an
@@ -864,6 +865,8 @@ def u_c_certified(it) -> bool:
     (False, True)
     >>> u_c_certified({"uncertainty": {"k_source": "U = a + k·u (bound condition)"}})
     False
+    >>> u_c_certified({"uncertainty": {"k_source": K_SOURCE_BOUND_CHI2}})
+    False
     >>> u_c_certified({"u_c_certified": False}), u_c_certified({"u_c_certified": True})
     (False, True)
     """
@@ -872,7 +875,7 @@ def u_c_certified(it) -> bool:
     if (_get(it, "details") or {}).get("bound_condition"):
         return False
     ks = str(_get(_get(it, "uncertainty"), "k_source") or "")
-    return not ks.startswith(K_SOURCE_BOUND_PREFIX)
+    return not (ks.startswith(K_SOURCE_BOUND_PREFIX) or ks == K_SOURCE_BOUND_CHI2)
 
 
 #: ``k_source`` of an item whose value is signed but whose statement is the coverage interval
@@ -883,6 +886,25 @@ K_SOURCE_MAX_ABS = "max-abs-interval"
 #: ``k_source`` of a standard deviation stated by its one-sided χ² interval
 #: (:func:`gonio.result.gum.std_dev_uncertainty`): its ν is stated by :func:`chi2_nu`.
 K_SOURCE_CHI2 = "chi-square"
+#: ``k_source`` of a dispersion (a noise rms) stated by its one-sided bound-condition limit
+#: (:func:`gonio.result.gum.dispersion_bound_statement`): [0, s + a + R], a its bounded lines
+#: at their bounds, R the one-sided χ² reach of its other lines, whose ν it states
+#: (:func:`chi2_nu`); written as the interval's formula, g the bounded relative error. A bound
+#: condition: its u_c is beside, not stated (:func:`u_c_certified`);
+#: ``gonio.report.stated.interval_kind`` "bound_chi2".
+K_SOURCE_BOUND_CHI2 = "U = a + R: [0, (s + R)/(1 − g)]"
+
+
+def chi2_stated_nu(k_source) -> bool:
+    """Whether an item stated by its interval states the ν of a one-sided χ² limit (its
+    integer part, never ∞: :func:`chi2_nu`): a standard deviation's χ² interval
+    (:data:`K_SOURCE_CHI2`) and a dispersion's bound-condition limit, whose reach above a is
+    that χ² limit's (:data:`K_SOURCE_BOUND_CHI2`).
+
+    >>> chi2_stated_nu("chi-square"), chi2_stated_nu(K_SOURCE_BOUND_CHI2), chi2_stated_nu("")
+    (True, True, False)
+    """
+    return k_source in (K_SOURCE_CHI2, K_SOURCE_BOUND_CHI2)
 
 #: ``k_source`` of the largest of several standard deviations stated with the selection bias
 #: of its maximum removed (IEC 62047-20 5.1.3.7's max σ_i): its 95 % interval inverts each
@@ -948,7 +970,7 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
                                   nonnegative=True)
         return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
                               p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative,
-                              chi2=_get(unc, "k_source") == K_SOURCE_CHI2,
+                              chi2=chi2_stated_nu(_get(unc, "k_source")),
                               numerical_u=_get(unc, "interval_numerical_u"))
     return state(_get(item, "value") if measured else None, U if ok else None,
                  k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,

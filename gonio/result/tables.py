@@ -19,7 +19,7 @@ import pandas as pd
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
-from gonio.result.statement import (K_SOURCE_CHI2, K_SOURCE_MAX_ABS, chi2_nu, coverage_k,
+from gonio.result.statement import (K_SOURCE_MAX_ABS, chi2_nu, chi2_stated_nu, coverage_k,
                                     item_statement, p_text, stated_nu, u_c_certified)
 
 ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "interval_low",
@@ -105,7 +105,7 @@ def item_row(key: str, it) -> dict:
         # results.json: the same row from the stored result)
         finite = (st.nu_eff is not None and unc.nu_eff is not None
                   and math.isfinite(float(unc.nu_eff)))
-        nu = chi2_nu(unc.nu_eff) if unc.k_source == K_SOURCE_CHI2 else stated_nu(unc.nu_eff)
+        nu = chi2_nu(unc.nu_eff) if chi2_stated_nu(unc.k_source) else stated_nu(unc.nu_eff)
         row.update(interval_low=lo, interval_high=hi, nu=nu if finite else None)
         return row
     if st is not None and st.U is None:      # stated without an uncertainty

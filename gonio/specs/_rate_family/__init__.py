@@ -31,7 +31,7 @@ def rate_specification(package: str, **fields):
                         study_bench=lazy("gonio.specs._rate_family.simulate:study_bench",
                                          **fields.pop("study_bench_options", {})),
                         options=frozenset({"cases"}), cases=dict(STUDY_CASES),
-                        fixed_cases=frozenset({"worst"}))
+                        fixed_cases=frozenset({"worst", "cold"}))
     return Specification(
         simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", run),
         run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", run),
@@ -67,6 +67,12 @@ STUDY_CASES = {
              "+-0.05 deg with the sign of the gyro's cross-axis sensitivity; the voltmeter's "
              "gain (a normal certificate: its 2u is not a bound) and the two phases drawn "
              "per trial as in typeb",
+    "cold": "as worst, with the gyro COLD at every set point (gonio.bench.equipment."
+            "cold_equipment): the chamber's deviation -2 C and the gyro's place at -1 C "
+            "(half Table 2's uniformity) at every set point, the static record's included, "
+            "the chamber's fluctuation at the bench's own amplitude: the sign worst does not "
+            "reach for the items read at one temperature whose reading falls with it (IEC "
+            "62047-20 5.4.5's noise items, the white level read low)",
 }
 
 

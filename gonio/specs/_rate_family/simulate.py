@@ -78,7 +78,9 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
 
     ``case``: the study case (``gonio validate --cases``, :data:`gonio.specs._rate_family.STUDY_CASES`):
     ``"typeb"`` the draws above, ``"worst"`` every one of those errors at its bound instead
-    (:func:`gonio.bench.equipment.worst_equipment`). In ``"worst"`` the bench states no
+    (:func:`gonio.bench.equipment.worst_equipment`), ``"cold"`` as ``"worst"`` with the gyro
+    cold at every set point (:func:`gonio.bench.equipment.cold_equipment`: the noise items'
+    worst sign). In ``"worst"`` and ``"cold"`` the bench states no
     certificate u for its rate table (``rate_table_u_rel`` None): the readings then carry
     none, the budgets read JJF 1535 Table 2's 0.05 % as a rectangular bound
     (:func:`gonio.specs._rate_family.rate_records.rate_table_line`) and the table's error
@@ -94,7 +96,7 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
                 warmup_bias_dps=b.gyro.warmup_bias_dps if power_on_transient else 0.0)
     if not cross_axis:
         g = replace(g, cross_axis_x=0.0, cross_axis_y=0.0)
-    if case == "worst":      # the laboratory that knows its table only by Table 2's bound
+    if case in ("worst", "cold"):   # the laboratory that knows its table by Table 2's bound
         b = replace(b, equipment=replace(b.equipment, rate_table_u_rel=None))
-    return replace(b, gyro=g, draw_equipment=bool(draw_equipment) or case == "worst",
+    return replace(b, gyro=g, draw_equipment=bool(draw_equipment) or case in ("worst", "cold"),
                    equipment_case=case)

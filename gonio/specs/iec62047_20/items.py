@@ -24,7 +24,8 @@ from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.result.gum import (budget_nu, dispersion_uncertainty, gum, max_magnitude_statement,
+from gonio.result.gum import (budget_nu, dispersion_bound_statement, dispersion_uncertainty,
+                              gum, max_magnitude_statement,
                               std_dev_uncertainty)
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.result.statement import K_SOURCE_SELECTED_MAX
@@ -420,6 +421,14 @@ class NoiseTemperatureCoefficient:
     def rms(self) -> float:
         return math.hypot(self.value, self.u)
 
+    @property
+    def bound(self) -> float:
+        """|c| + U(c), U(c) = t_95(ν)·u (the far end of the coefficient's 95 % interval): the
+        coefficient's bound the noise items' bound condition takes, as the bias's takes
+        |β| + U(β) (:func:`bias_tc_bound_dps_per_c`)."""
+        from gonio.result.statement import coverage_k
+        return abs(self.value) + coverage_k(self.nu, 0.95) * self.u
+
 
 def noise_temperature_coefficient(ctx: Context) -> NoiseTemperatureCoefficient | None:
     """The white noise level's relative temperature coefficient from the 5.3.3.6 visits'
@@ -481,22 +490,70 @@ NOISE_TEMPERATURE_SOURCE = ("the gyro's temperature during the static record aga
                             "visits, √(c² + u²(c))")
 
 
+def noise_record_offset_c(ctx: Context, record_c: float | None) -> float:
+    """ΔT (°C), the bound of the gyro's temperature during the static record against T_BASE:
+    :func:`gyro_temperature_bound_c` (the chamber's deviation and the gyro's place, added)
+    + |record_c − T_BASE| (the record's logged temperature, where the readings hold it; 0
+    where not)."""
+    return gyro_temperature_bound_c(ctx) + (abs(record_c - ctx.t_base_c) if record_c is not None
+                                            and math.isfinite(record_c) else 0.0)
+
+
 def noise_temperature_line(ctx: Context, value: float, record_c: float | None):
     """The noise items' line (rectangular, the item's unit) for the gyro's temperature during
     the static record against T_BASE, or None where :func:`noise_temperature_coefficient`
     gives no coefficient (the finding then says so): half-width value·√(c² + u²(c))·ΔT
     (the product of the uncertain coefficient and the zero-mean temperature error, JCGM 100
-    5.1.2 to second order) with ΔT = :func:`gyro_temperature_bound_c` + |record_c − T_BASE|
-    (the record's logged temperature, where the readings hold it; 0 where not) — the
-    chamber's deviation and the gyro's place added linearly into one rectangular, as every
-    chamber line of the rate specifications takes them."""
+    5.1.2 to second order) with ΔT = :func:`noise_record_offset_c` — the chamber's deviation
+    and the gyro's place added linearly into one rectangular, as every chamber line of the
+    rate specifications takes them. A GUM line, for u_c (beside the statement); the statement
+    holds the same error at its bound (:func:`noise_temperature_bound_rel`)."""
     tc = noise_temperature_coefficient(ctx)
     if tc is None:
         return None
-    dT = gyro_temperature_bound_c(ctx) + (abs(record_c - ctx.t_base_c) if record_c is not None
-                                          and math.isfinite(record_c) else 0.0)
-    return type_b("dT_noise", 0.0, abs(value) * tc.rms * dT, "rectangular",
-                  source=NOISE_TEMPERATURE_SOURCE)
+    return type_b("dT_noise", 0.0, abs(value) * tc.rms * noise_record_offset_c(ctx, record_c),
+                  "rectangular", source=NOISE_TEMPERATURE_SOURCE)
+
+
+def noise_temperature_bound_rel(ctx: Context, record_c: float | None) -> float | None:
+    """The bound g of the relative error of the noise items' reading from the gyro's
+    temperature during the static record: (|c| + U(c))·ΔT
+    (:attr:`NoiseTemperatureCoefficient.bound`, :func:`noise_record_offset_c`). The white
+    level at T_BASE + δ is σ·exp(c·δ) ≥ σ·(1 − |c|·|δ|) (c the slope of ln σ against T), so
+    a reading at any temperature within ΔT is at least σ·(1 − g): the factor the noise items'
+    bound condition takes (:func:`noise_statement`); None without a coefficient."""
+    tc = noise_temperature_coefficient(ctx)
+    if tc is None:
+        return None
+    return tc.bound * noise_record_offset_c(ctx, record_c)
+
+
+#: What the noise items keep in ``details.bound_condition.basis``.
+NOISE_BOUND_BASIS = (
+    "bound condition: the gyro's temperature during the static record at the chamber's "
+    "deviation and place bounds (Table 2) plus the record's logged offset from T_BASE, ΔT, "
+    "times |c| + U(c) of the white level's coefficient from the 5.3.3.6 visits, g, the "
+    "reading's relative error at its bound with the sign that lowers it; and the one-sided "
+    "χ² 95 % limit of the other lines, ν_rest = ½(s/u_rest)² (JCGM 100 4.3.7, E.4.3): "
+    "[0, (s + R)/(1 − g)] = [0, s + a + R], which holds at least 95 % at every temperature "
+    "within the bounds")
+
+
+def noise_statement(ctx: Context, value: float, u):
+    """The one statement of a noise item (5.4.5.2, 5.4.5.1 b), c)) from its budget ``u``
+    (its lines and :func:`noise_temperature_line`): with the 5.3.3.6 visits' coefficient, the
+    one-sided bound condition of the gyro's temperature during the static record
+    (:func:`gonio.result.gum.dispersion_bound_statement` with ``dT_noise`` at
+    :func:`noise_temperature_bound_rel`: Table 2 lets the chamber sit at its bound for the whole
+    record, the gyro cold, the white level low; the GUM line alone covered 5 of 8 such
+    trials); without one, the χ² statement (:func:`gonio.result.gum.dispersion_uncertainty`,
+    and the finding :func:`noise_temperature_finding`). Returns (uncertainty, the bound
+    condition's parts for ``details.bound_condition`` or {})."""
+    g = None if noise_temperature_coefficient(ctx) is None else \
+        noise_temperature_bound_rel(ctx, _static_record_c(ctx))
+    if not g:
+        return dispersion_uncertainty(value, u), {}
+    return dispersion_bound_statement(value, u, {"dT_noise": g}, basis=NOISE_BOUND_BASIS)
 
 
 def scale_factor(ctx: Context) -> Item:
@@ -1347,10 +1404,11 @@ def arw(ctx: Context) -> Item:
     midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     edf = arw_line_edf(allan, mask, fit)
     ratio_five_same = arw_lift_factor(allan.tau_s, mask, fit)
-    u = arw_uncertainty(value, ratio, edf, ratio_five_same,
-                        temperature=_noise_temperature_line(ctx, value))
+    u, bc = noise_statement(ctx, value, arw_budget(
+        value, ratio, edf, ratio_five_same, temperature=_noise_temperature_line(ctx, value)))
     std_val, std_mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
     return Item("arw", t, cl, un, value, uncertainty=u, details={
+        **({"bound_condition": bc} if bc else {}),
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
         "line_edf": edf,
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
@@ -1452,6 +1510,24 @@ def arw_line_edf(allan, mask, fit) -> float:
     return 2.0 / v if math.isfinite(v) and v > 0 else fallback
 
 
+def arw_budget(value: float, ratio: float, edf: float, ratio_alt: float | None = None,
+               temperature=None) -> Uncertainty:
+    """The GUM budget of 5.4.5.2's ARW (:func:`arw_uncertainty`'s lines, before the
+    statement): what :func:`noise_statement` states."""
+    u_n = value / math.sqrt(2.0 * edf) if edf > 0 and math.isfinite(edf) else 0.0
+    alt = ratio if ratio_alt is None or not math.isfinite(ratio_alt) or ratio_alt <= 0 \
+        else ratio_alt
+    lines = [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
+                    source="χ² of the −½ line's Allan variances: edf of the line reading "
+                           "under the fitted five-term model"),
+             type_b("corr", 0.0, abs(ratio / alt - 1.0), "rectangular",
+                    source="lift correction's model: band-limited against the five-term "
+                           "fit's factor over the same τ (bound)")]
+    if temperature is None:
+        return gum(lambda n, c: n * (1 + c), lines)
+    return gum(lambda n, c, t: n * (1 + c) + t, lines + [temperature])
+
+
 def arw_uncertainty(value: float, ratio: float, edf: float,
                     ratio_alt: float | None = None, temperature=None) -> Uncertainty:
     """The one statement of 5.4.5.2's ARW (:func:`arw`): a dispersion, stated as the noise rms
@@ -1468,21 +1544,10 @@ def arw_uncertainty(value: float, ratio: float, edf: float,
     the line's u 0.52 % on the built-in record). Without the correction ν = edf and the
     upper end is N·√(edf/χ²_0.05,edf), the χ² interval of the Allan deviations the line
     reads. ``temperature``: the line for the gyro's temperature during the record against
-    T_BASE (:func:`noise_temperature_line`, °/√h), added where given."""
-    u_n = value / math.sqrt(2.0 * edf) if edf > 0 and math.isfinite(edf) else 0.0
-    alt = ratio if ratio_alt is None or not math.isfinite(ratio_alt) or ratio_alt <= 0 \
-        else ratio_alt
-    lines = [from_u("N", value, u_n, dof=edf if u_n > 0 else DOF_U_WITHIN_10PCT,
-                    source="χ² of the −½ line's Allan variances: edf of the line reading "
-                           "under the fitted five-term model"),
-             type_b("corr", 0.0, abs(ratio / alt - 1.0), "rectangular",
-                    source="lift correction's model: band-limited against the five-term "
-                           "fit's factor over the same τ (bound)")]
-    if temperature is None:
-        u = gum(lambda n, c: n * (1 + c), lines)
-    else:
-        u = gum(lambda n, c, t: n * (1 + c) + t, lines + [temperature])
-    return dispersion_uncertainty(value, u)
+    T_BASE (:func:`noise_temperature_line`, °/√h), added where given; the calibration states
+    the ARW by :func:`noise_statement` over the same budget (:func:`arw_budget`), by the
+    bound condition of that temperature where the coefficient is known."""
+    return dispersion_uncertainty(value, arw_budget(value, ratio, edf, ratio_alt, temperature))
 
 
 def arw_reading_midpoint(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
@@ -1739,15 +1804,20 @@ def _noise_budget(lines: list, temperature):
     return gum(lambda r, e, t: r + e + t, lines + [temperature])
 
 
+def _static_record_c(ctx: Context) -> float | None:
+    """The static record's logged temperature (:func:`static_record_temperature_c`), once."""
+    key = ("static_record_c",)
+    if key not in ctx.cache:
+        ctx.cache[key] = static_record_temperature_c(ctx.df)
+    return ctx.cache[key]
+
+
 def _noise_temperature_line(ctx: Context, value: float):
     """:func:`noise_temperature_line` at the static record's logged temperature (None
     without a coefficient, :func:`noise_temperature_coefficient`)."""
     if noise_temperature_coefficient(ctx) is None:
         return None
-    key = ("static_record_c",)
-    if key not in ctx.cache:
-        ctx.cache[key] = static_record_temperature_c(ctx.df)
-    return noise_temperature_line(ctx, value, ctx.cache[key])
+    return noise_temperature_line(ctx, value, _static_record_c(ctx))
 
 
 def _noise_tc_details(ctx: Context) -> dict | None:
@@ -1789,9 +1859,10 @@ def inband_noise(ctx: Context) -> Item:
                                      "overlapping segments"),
                        _fluctuation_noise_line(ctx, x, dt, nper, 0.0, band, rms)],
                       _noise_temperature_line(ctx, rms))
-    u = dispersion_uncertainty(rms, u)
+    u, bc = noise_statement(ctx, rms, u)
     return Item("inband_noise", t, cl, un, rms, uncertainty=u,
-                details={"density_dps_per_sqrt_hz": dens, "band_hz": band})
+                details={"density_dps_per_sqrt_hz": dens, "band_hz": band,
+                         **({"bound_condition": bc} if bc else {})})
 
 
 def frequency_band(ctx: Context) -> Item:
@@ -3154,9 +3225,10 @@ def broadband_noise(ctx: Context) -> Item:
         _fluctuation_noise_line(ctx, x, dt, nper, nz["band_hz"], f_hi,
                                 d["rms_dps"], include_lo=True)],
         _noise_temperature_line(ctx, d["rms_dps"]))
-    u = dispersion_uncertainty(d["rms_dps"], u)
+    u, bc = noise_statement(ctx, d["rms_dps"], u)
     return Item("broadband_noise", t, cl, un, d["rms_dps"], uncertainty=u, details={
-        **d, "band_low_hz": nz["band_hz"], "band_high_hz": f_hi})
+        **d, "band_low_hz": nz["band_hz"], "band_high_hz": f_hi,
+        **({"bound_condition": bc} if bc else {})})
 
 
 def resolution(ctx: Context) -> Item:
