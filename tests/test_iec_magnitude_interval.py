@@ -63,13 +63,19 @@ def test_magnitude_is_stated_by_one_interval_of_possible_values(request, spec, k
     assert 0.0 <= lo <= it.value <= hi and u.U == pytest.approx(hi - it.value)
     assert " ± " not in st.text() and st.interval is not None
     assert float(st.interval[0]) >= 0.0
-    # the interval is that of the supplies' own points: upper = max_i(|x_i| + c_H u_i)
+    # the interval is that of the supplies' own points: upper = max_i(|x_i| + c_H u_i), + b_i
+    # each point's bounded error at its bound where the item states a bound condition (JJF
+    # K_t, B_t: the gyro's temperature at the set points; u_i then of the other lines)
     f = it.details["max_abs_interval"]
     x, uu = np.abs(f["x"]), np.asarray(f["u"])
+    bc = it.details.get("bound_condition")
+    b = np.asarray(bc["b"]) if bc else np.zeros_like(x)
+    if bc:
+        assert list(uu) == bc["u_rest"] and b.shape == x.shape and np.all(b > 0)
     from scipy.stats import norm, t as student
     q = norm.cdf(f["c_upper"])
     cH = np.array([f["c_upper"] if math.isinf(n) else student.ppf(q, n) for n in f["nu"]])
-    assert hi == pytest.approx(float(np.max(x + cH * uu)), rel=1e-12)
+    assert hi == pytest.approx(float(np.max(x + cH * uu + b)), rel=1e-12)
 
 
 @pytest.mark.parametrize("spec, key", [("iec", k) for k in KEYS] + [("jjf", k) for k in JJF_KEYS])

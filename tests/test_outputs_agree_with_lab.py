@@ -388,6 +388,16 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
                 clause = reason_text(it["clause"], labels("zh"), PHRASES_ZH)
             assert clause in legend, (lang, key, clause)
             phrase = kinds.get(it["uncertainty"]["k_source"])
+            if (it.get("details") or {}).get("bound_condition") and phrase and \
+                    phrase[0] == "max_i |x_i|":
+                # the extreme of magnitudes with each point's bounded errors in its reach (JJF
+                # K_t, B_t): its own kind, its clauses with its bounded lines' words in its part
+                bound = ("into which bounded errors enter", "受有界误差影响的多个点")[n]
+                assert bound in legend, (lang, key, bound)
+                part = re.split(r"[;；]", legend[legend.index(bound):])[0]
+                assert re.search(rf"[（(][^()（）]*{re.escape(clause)}[,，:：]", part), (
+                    lang, key, part)
+                continue
             if phrase:
                 assert phrase[n] in legend, (lang, key, phrase[n])
                 # the item's clause stands in the bracket after its kind's phrase (a clause
@@ -415,7 +425,8 @@ def test_items_csv_nu_is_the_stated_nu(issued):
             assert got == "", (key, got)
         elif got:
             # a χ² interval's ν: the one its bound is computed with, never ∞
-            chi2 = it["uncertainty"].get("k_source") == "chi-square"
+            chi2 = it["uncertainty"].get("k_source") in ("chi-square",
+                                                         "U = a + R: [0, (s + R)/(1 − g)]")
             want = (math.inf if nu > NU_INFINITE and not chi2
                     else float(max(1, math.floor(nu))))
             assert float(got) == want, (key, got, nu)

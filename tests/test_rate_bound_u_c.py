@@ -36,7 +36,10 @@ NS = {"dcc": DCC_NS, "si": SI_NS}
 #: enters (JJF 7.2.1, IEC 5.1.3.1, 5.1.3.2), IEC's bias items (5.3.3.1, 5.3.3.2) and IEC's noise
 #: items (5.4.5.2, 5.4.5.1 b), c): the gyro's temperature during the static record, one-sided)
 NOISE_ITEMS = {"arw", "inband_noise", "broadband_noise"}
-BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"},
+#: JJF 7.2.5 and 7.2.14: the extreme of magnitudes of temperature slopes, the gyro's
+#: temperature error at the chamber's set points at its bound in each slope's reach
+SLOPE_ITEMS = {"sf_temperature_sensitivity", "bias_temperature_sensitivity"}
+BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"} | SLOPE_ITEMS,
                "iec62047-20": {"scale_factor", "initial_sf_variation", "bias",
                                "initial_bias_variation"} | NOISE_ITEMS}
 #: The bounded lines of each bound item (IEC 5.3.3.1/5.3.3.2: the gyro's temperature error at
@@ -44,7 +47,7 @@ BOUND_ITEMS = {"jjf1535-2015": {"scale_factor"},
 BOUND_LINES = {"scale_factor": {"e_table", "e_TU"}, "initial_sf_variation": {"e_table", "e_TU"},
                "bias": {"e_TU", "e_align", "e_a_bnd"},
                "initial_bias_variation": {"e_TU", "e_align", "e_a_bnd"},
-               **{k: {"dT_noise"} for k in NOISE_ITEMS}}
+               **{k: {"dT_noise"} for k in NOISE_ITEMS}, **{k: {"dT"} for k in SLOPE_ITEMS}}
 
 
 def gonio(*args, cwd: Path) -> None:
@@ -116,8 +119,11 @@ def test_dcc_states_no_standard_uncertainty_for_a_bound_item(cal):
             assert len(vals) == 1, key
             lo, hi = (float(v) for v in vals[0].text.split())
             jlo, jhi = it["uncertainty"]["interval"]
-            # the printed ends hold the interval (rounded outward) within a rounding step
-            assert lo <= jlo and hi >= jhi and (hi - lo) < 1.05 * (jhi - jlo), (key, lo, hi)
+            # the printed ends hold the interval (rounded outward) within a rounding step each
+            step = 10.0 ** -max(len(v.split(".")[1]) if "." in v else 0
+                                for v in vals[0].text.split())
+            assert lo <= jlo and hi >= jhi and (hi - lo) <= (jhi - jlo) + 2.0001 * step, (
+                key, lo, hi)
             assert "no standard uncertainty of the item is certified" in etree.tostring(
                 r, encoding="unicode")
         elif it["uncertainty"] and it["uncertainty"].get("k") is not None and \
@@ -154,10 +160,14 @@ def test_legend_names_each_items_bounded_lines(cal):
     zh = interval_legend(res["items"], labels("zh"))
     for key in BOUND_ITEMS[cal["spec"]]:
         lines = set(res["items"][key]["details"]["bound_condition"]["a_lines"])
-        assert lines == ({"e_table"} if cal["spec"] == "jjf1535-2015" else BOUND_LINES[key])
+        assert lines == ({"e_table"} if key == "scale_factor" and cal["spec"] == "jjf1535-2015"
+                         else BOUND_LINES[key])
     if cal["spec"] == "jjf1535-2015":
         assert "(7.2.1: the rate table's error)" in page
         assert "（7.2.1：转台误差）" in zh
+        assert ("(7.2.5, 7.2.14: the gyro's temperature error at the chamber's set points)"
+                in page)
+        assert "（7.2.5, 7.2.14：陀螺在温箱设定点的温度误差）" in zh
     else:
         assert ("(5.1.3.1, 5.1.3.2: the rate table's error and the gyro's temperature error "
                 "at the set point; 5.3.3.1, 5.3.3.2: the gyro's temperature error at the set "
@@ -270,6 +280,8 @@ def test_zh_dcc_names_the_interval_quantity_whole(cal):
         assert f"（{it['clause']}）" in zh_name and zh_name != zh_interval, zh_name
         # a dispersion's one-sided limit [0, s + a + R], every other item's value ± (a + k·u)
         kind = "单侧界限条件上限" if key in NOISE_ITEMS else "界限条件区间"
+        if key in SLOPE_ITEMS:
+            assert "最大绝对值 max|x_i| 的 95 % 区间" in zh_interval, zh_interval
         assert zh_interval.startswith(zh_name) and kind in zh_interval, zh_interval
         assert ("[0, s + a + R]" in zh_interval) == (key in NOISE_ITEMS), zh_interval
         assert zh_interval.endswith("p = 95 %"), zh_interval

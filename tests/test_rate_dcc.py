@@ -127,8 +127,10 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
                 assert hi == pytest.approx(iv[1] * factor, rel=0.05)
                 name = nxt.findtext("dcc:name/dcc:content", None, NS)
                 # value ± (a + k·u), or a dispersion's one-sided [0, s + a + R]
-                kind = ("one-sided bound-condition limit" if unc["k_source"]
-                        == "U = a + R: [0, (s + R)/(1 − g)]" else "bound-condition interval")
+                kind = {"U = a + R: [0, (s + R)/(1 − g)]": "one-sided bound-condition limit",
+                        "interval of max|x_i| (uncertainty.extreme.max_abs_interval)":
+                        "the 95 % interval of the largest magnitude"}.get(
+                            unc["k_source"], "bound-condition interval")
                 assert kind in name and name.endswith(
                     f"p = {100 * unc['coverage_probability']:g} %"), name
                 continue

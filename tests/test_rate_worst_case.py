@@ -183,14 +183,16 @@ def _kt(spec, proto, readings, truth, **md):
 
 
 def test_a_budget_without_its_chamber_line_under_covers_at_the_bound(worst_trials):
-    """The worst case finds a budget line that lost its value: K_t's chamber-deviation line
-    (``chamber_deviation_bound_c`` as the readings state it) set to 0 misses the truth in
-    both trials, where the hot point's span is 3 °C longer than its set points say (the
-    deviation's +2 °C and the volume's warm end's +1 °C); the budget as it is is wider."""
+    """The worst case finds a budget line that lost its value: K_t's chamber line (the
+    readings' ``chamber_deviation_bound_c`` and ``chamber_uniformity_c``) set to 0 misses
+    the truth in both trials, where the hot point's span is 3 °C longer than its set points
+    say (the deviation's +2 °C and the volume's warm end's +1 °C); the budget as it is is
+    wider."""
     spec, proto, trials = worst_trials
     for readings, truth in trials:
         (lo, hi), t = _kt(spec, proto, readings, truth)
-        (lo0, hi0), _ = _kt(spec, proto, readings, truth, chamber_deviation_bound_c="0.0")
+        (lo0, hi0), _ = _kt(spec, proto, readings, truth, chamber_deviation_bound_c="0.0",
+                            chamber_uniformity_c="0.0")
         assert not lo0 <= t <= hi0                  # the mutated budget misses the truth
         assert lo < lo0 and hi > hi0                # the line widens the interval
         assert lo0 > t                              # read high: the span is stretched

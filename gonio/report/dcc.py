@@ -55,7 +55,8 @@ from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, finding_text, labels
 from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
-from gonio.result.statement import DSI_UNITS, K_SOURCE_BOUND_CHI2, p_text
+from gonio.result.statement import (DSI_UNITS, K_SOURCE_BOUND_CHI2, K_SOURCE_MAX_MAGNITUDE,
+                                    p_text)
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -179,10 +180,18 @@ BOUND_CHI2_INTERVAL = ("one-sided bound-condition limit, [0, s + a + R]: the bou
                        "the other lines; no standard uncertainty of the item is certified")
 
 
+#: what the interval of the largest magnitude with each point's bounded errors at their bounds
+#: is, in the DCC's words (:func:`gonio.result.gum.max_magnitude_statement`'s ``bounded``)
+MAX_ABS_BOUND_INTERVAL = ("the 95 % interval of the largest magnitude max|x_i|, each point's "
+                          "reach c·u_i + b_i: u_i of the lines other than the bounded ones, "
+                          "b_i their bound at the point; no standard uncertainty of the item "
+                          "is certified")
+
+
 def bound_interval_text(item: dict) -> str:
     """What a results.json item stated by its bound condition names its interval quantity in
-    the DCC: :data:`BOUND_CHI2_INTERVAL` for a dispersion's one-sided limit, else
-    :data:`BOUND_INTERVAL`.
+    the DCC: :data:`BOUND_CHI2_INTERVAL` for a dispersion's one-sided limit,
+    :data:`MAX_ABS_BOUND_INTERVAL` for the extreme of magnitudes, else :data:`BOUND_INTERVAL`.
 
     >>> from gonio.result.statement import K_SOURCE_BOUND_CHI2
     >>> bound_interval_text({"uncertainty": {"k_source": K_SOURCE_BOUND_CHI2}})[:16]
@@ -191,7 +200,11 @@ def bound_interval_text(item: dict) -> str:
     'bound-condition '
     """
     ks = (item.get("uncertainty") or {}).get("k_source")
-    return BOUND_CHI2_INTERVAL if ks == K_SOURCE_BOUND_CHI2 else BOUND_INTERVAL
+    if ks == K_SOURCE_BOUND_CHI2:
+        return BOUND_CHI2_INTERVAL
+    if ks == K_SOURCE_MAX_MAGNITUDE:
+        return MAX_ABS_BOUND_INTERVAL
+    return BOUND_INTERVAL
 
 
 #: The name of a non-negative item whose bias-corrected estimate fell below zero, written as

@@ -206,6 +206,15 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "多个点的最大绝对值 max|x_i| 给出该极值的 95 % 区间 [max(0, max(|x_i| − "
                            "c_L·u_i)), max(|x_i| + c_H·u_i)]（对各点取最大，由各点的 x_i 与 u_i "
                            "求得），对各点真值的任何分布形态均成立（而非单点的 max|x_i| ± k·u）"},
+    "k_iv_max_abs_bound": {"en": "the largest magnitude of several points into which bounded "
+                                 "errors enter, by the same interval with each point's bounded "
+                                 "errors at their bounds added to its reach, [max(0, "
+                                 "max_i(|x_i| − c_L·u_i − b_i)), max_i(|x_i| + c_H·u_i + b_i)], "
+                                 "u_i of the other lines (those errors named after its clause), "
+                                 "which holds at every error within the bounds",
+                           "zh": "受有界误差影响的多个点的最大绝对值给出同一区间，各点的有界误差取其界限加入其延伸："
+                                 "[max(0, max(|x_i| − c_L·u_i − b_i)), max(|x_i| + c_H·u_i + "
+                                 "b_i)]，u_i 为其他分量的（这些误差列于其条款之后），在界限内任一误差下成立"},
     "k_iv_sel_max": {"en": "the largest of several standard deviations, the selection bias of the "
                            "maximum removed (the midpoint of its bounds), by the 95 % interval "
                            "of the largest true spread that inverts each record's own χ² test: "
@@ -240,6 +249,8 @@ LABELS: dict[str, dict[str, str]] = {
     "bound_line_e_table": {"en": "the rate table's error", "zh": "转台误差"},
     "bound_line_e_TU": {"en": "the gyro's temperature error at the set point",
                         "zh": "陀螺在设定点的温度误差"},
+    "bound_line_dT": {"en": "the gyro's temperature error at the chamber's set points",
+                      "zh": "陀螺在温箱设定点的温度误差"},
     "bound_line_e_align": {"en": "the input axis's misalignment on the Earth rate",
                            "zh": "输入轴对准误差对地球自转角速度的影响"},
     "bound_line_e_a_bnd": {"en": "the scale factor's bounded part",
@@ -755,6 +766,14 @@ _BOUND_CHI2_INTERVAL_RE = (r"one-sided bound-condition limit, \[0, s \+ a \+ R\]
 _BOUND_CHI2_INTERVAL_ZH = ("[0, s + a + R]：有界误差（该项的有界分量）取其界限并取使读数偏低的符号为 a，"
                            "加其他分量单侧 χ² 上限的增量 R；不给出该项的标准不确定度")
 
+#: gonio.report.dcc.MAX_ABS_BOUND_INTERVAL the same way, and its Chinese.
+_MAX_ABS_BOUND_INTERVAL_RE = (r"the 95 % interval of the largest magnitude max\|x_i\|, each "
+                              r"point's reach c·u_i \+ b_i: u_i of the lines other than the "
+                              r"bounded ones, b_i their bound at the point; no standard "
+                              r"uncertainty of the item is certified")
+_MAX_ABS_BOUND_INTERVAL_ZH = ("最大绝对值 max|x_i| 的 95 % 区间，各点延伸 c·u_i + b_i：u_i 为有界分量以外各分量的合成，"
+                              "b_i 为其在该点的界；不给出该项的标准不确定度")
+
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
 #: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
 DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
@@ -778,6 +797,8 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      "{1}：各元素界限条件区间的上限，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
     (rf"(.+): {_BOUND_INTERVAL_RE}; p = (\S+) %",
      "{1}：界限条件区间，" + _BOUND_INTERVAL_ZH + "；p = {2} %"),
+    (rf"(.+): {_MAX_ABS_BOUND_INTERVAL_RE}; p = (\S+) %",
+     "{1}：界限条件区间，" + _MAX_ABS_BOUND_INTERVAL_ZH + "；p = {2} %"),
     (rf"(.+): {_BOUND_CHI2_INTERVAL_RE}; p = (\S+) %",
      "{1}：单侧界限条件上限，" + _BOUND_CHI2_INTERVAL_ZH + "；p = {2} %"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),

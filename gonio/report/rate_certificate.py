@@ -139,9 +139,23 @@ def bound_condition_row(it: dict, src: str, n: dict) -> list:
     other lines (the ν the results table prints beside the interval); a dispersion's one-sided
     bound condition (``reach_rest``, :func:`gonio.result.gum.dispersion_bound_statement`):
     "U = a + R: g = …, a = …, u_rest = …, R = …, ν_eff = …, p = 95 %", g the bounded relative
-    error, R the one-sided χ² reach of the other lines."""
+    error, R the one-sided χ² reach of the other lines; the extreme of magnitudes with each
+    point's bound in its reach (``b``, :func:`gonio.result.gum.max_magnitude_statement`):
+    "max(|x_i| + c_H·u_i + b_i) = |x_j| + c_H·u_j + b_j: b_j = …, u_j = …", j the
+    point that gives it."""
     d = f"{src}.details.bound_condition"
     bc = it["details"]["bound_condition"]
+    if "b" in bc:       # the extreme of magnitudes, each point's bound in its reach
+        mi = it["details"].get("max_abs_interval") or {}
+        x, c = mi.get("x") or [0.0] * len(bc["b"]), float(mi.get("c_upper") or 0.0)
+        j = max(range(len(bc["b"])),
+                key=lambda i: abs(x[i]) + c * bc["u_rest"][i] + bc["b"][i])
+        seg = ["max(|x_i| + c_H·u_i + b_i) = |x_j| + c_H·u_j + b_j: b_j = ",
+               _num(bc["b"][j], f"{d}.b.{j}", "sig3"),
+               ", u_j = ", _num(bc["u_rest"][j], f"{d}.u_rest.{j}", "sig3")]
+        if n["p"] is not None:
+            seg += [f", p {p_relation(n['p'])} {n['p']} %"]
+        return [it["clause"], "U", seg, "", _num(bc["U"], f"{d}.U", "U")]
     if "reach_rest" in bc:
         seg = ["U = a + R: g = ", _num(bc["g"], f"{d}.g", "sig3"),
                ", a = ", _num(bc["a"], f"{d}.a", "sig3"),

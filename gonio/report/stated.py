@@ -163,11 +163,11 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
 
 
 #: the kinds of interval an item can be stated by, in the legend's order
-INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "bound", "bound_chi2", "own",
-                  "upper")
+INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "max_abs_bound", "sel_max", "bound",
+                  "bound_chi2", "own", "upper")
 
 #: The interval kinds of a bound condition (their clauses named with their bounded lines).
-BOUND_KINDS = ("bound", "bound_chi2")
+BOUND_KINDS = ("bound", "bound_chi2", "max_abs_bound")
 
 
 def interval_kind(item: dict) -> str | None:
@@ -176,7 +176,9 @@ def interval_kind(item: dict) -> str | None:
     deviation's χ²), "range" (a half range's normal range), "belt" (a bias-corrected range's
     confidence belt), "max_abs" (the extreme of magnitudes max_i |x_i|), "sel_max" (the
     largest σ_i less its selection bias), "bound" (value ± (a + k·u): the equipment's errors
-    at their bounds plus k·u of the rest), "bound_chi2" (a dispersion's one-sided limit
+    at their bounds plus k·u of the rest), "max_abs_bound" (the extreme of magnitudes with
+    each point's bounded errors at their bounds, ``details.bound_condition``), "bound_chi2"
+    (a dispersion's one-sided limit
     [0, s + a + R]: its bounded lines at their bounds, a, plus the χ² reach R of the rest),
     "own" (its own distribution: Monte Carlo, folded normal, pivot, outcome distribution),
     "upper" (a non-negative item's upper bound), or None (value ± U, or not measured).
@@ -197,6 +199,9 @@ def interval_kind(item: dict) -> str | None:
         ks = unc.get("k_source") or ""
         if ks == K_SOURCE_BOUND_CHI2:
             return "bound_chi2"
+        if ks in (K_SOURCE_MAX_ABS, K_SOURCE_MAX_MAGNITUDE) and \
+                (item.get("details") or {}).get("bound_condition"):
+            return "max_abs_bound"
         if ks.startswith(K_SOURCE_BOUND_PREFIX):
             return "bound"
         return {"chi-square": "chi2", "normal range": "range", "neyman-belt": "belt",

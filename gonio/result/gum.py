@@ -258,7 +258,8 @@ K_SOURCE_MAX_MAGNITUDE = _K_SOURCE_MAX_MAGNITUDE
 
 
 def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
-                            value: float) -> tuple[float, Uncertainty, dict]:
+                            value: float, bounded: dict | None = None
+                            ) -> tuple[float, Uncertainty, dict]:
     """The one statement of a characteristic that is the largest magnitude max_i |x_i| of
     signed points (IEC 62047-20 5.1.3.5 and 5.3.3.3: the largest |R_Vi|; 5.1.3.6, 5.2,
     5.3.3.8; JJF 1535 7.2.12's B_g = max |B_g,axis|, 7.2.2, 7.2.3, 7.2.5, 7.2.14), and its
@@ -276,17 +277,39 @@ def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
     (its components and u_c are kept, for the budget table); ``value``: the estimate (a
     reading less its selection midpoint), never taken below the interval's lower end (a
     point measured with a smaller u shows that the extreme is at least that). The third
-    element: the interval's figures and its points (x_i, u_i, ν_i) for the item's details."""
+    element: the interval's figures and its points (x_i, u_i, ν_i) for the item's details.
+
+    ``bounded`` ({"symbol": s, "rest": [the points' results without that line], "b": [b_i],
+    "basis": text}): a bounded error of each point at its bound, the bound condition of an
+    extreme (JCGM 100 4.3.7; :func:`uncertainty.extreme.max_abs_interval`'s ``bound``): the
+    interval is [max(0, max_i(|x_i| − c_L u_i − b_i)), max_i(|x_i| + c_H u_i + b_i)] with u_i,
+    ν_i those of the points' other lines, which holds max_i |μ_i| for every error within the
+    bounds, where a root-sum-square line at its bound does not (JJF 1535 7.2.5 with the gyro
+    cold at the hot set point: 24 of 40). Its parts go to the details' ``bound_condition``
+    ({"a_lines": {s: max b_i}, "b": [b_i], "u_rest": [u_i], "nu_rest": [ν_i], "basis"}): the
+    u_c of ``u`` (the line rectangular) is then kept beside, not stated
+    (:func:`gonio.result.statement.u_c_certified`)."""
     from uncertainty.extreme import max_abs_interval
 
-    nu = [math.inf if q.nu_eff is None or not math.isfinite(q.nu_eff) else max(1.0, q.nu_eff)
-          for q in points]
-    r = max_abs_interval(np.asarray(x, dtype=float), [q.u_c for q in points], nu)
+    def dof(q):
+        return math.inf if q.nu_eff is None or not math.isfinite(q.nu_eff) else max(1.0, q.nu_eff)
+
+    used = points if not bounded else bounded["rest"]
+    b = [0.0] * len(points) if not bounded else [float(v) for v in bounded["b"]]
+    if len(used) != len(points) or len(b) != len(points):
+        raise ValueError("max_magnitude_statement: one rest result and one bound per point")
+    nu = [dof(q) for q in used]
+    r = max_abs_interval(np.asarray(x, dtype=float), [q.u_c for q in used], nu, bound=b)
     if not r.upper > r.lower:       # no uncertainty at all (a noise-free bench): no interval
         return float(value), u, {}
     value = min(max(float(value), r.lower), r.upper)
     figures = {"max_abs_interval": {**r.to_dict(), "x": [float(v) for v in x],
-                                    "u": [float(q.u_c) for q in points], "nu": nu}}
+                                    "u": [float(q.u_c) for q in used], "nu": nu}}
+    if bounded and any(v > 0 for v in b):
+        figures["bound_condition"] = {
+            "a_lines": {bounded["symbol"]: max(b)}, "b": b,
+            "u_rest": [float(q.u_c) for q in used], "nu_rest": nu,
+            "U": r.upper - value, "upper": r.upper, "basis": bounded["basis"]}
     return value, replace(u, U=r.upper - value, k=None, nu_eff=None,
                           coverage_probability=r.p, k_source=K_SOURCE_MAX_MAGNITUDE,
                           interval=(r.lower, r.upper)), figures

@@ -459,12 +459,48 @@ def _temperature_bound_c(ctx: Context) -> float:
     return rg.gyro_temperature_bound_c(ctx.chamber_deviation_c, ctx.chamber_uniformity_c)
 
 
+#: What 7.2.5 and 7.2.14 keep in ``details.bound_condition.basis``.
+TEMPERATURE_SLOPE_BOUND_BASIS = (
+    "bound condition: the gyro's temperature error at each chamber set point at its bound "
+    "B (the chamber's deviation plus half its uniformity, Table 2; the room point read as "
+    "stated), each slope's reach b_i = |x_i|·B/(|T_i − T_rt| − B) added to the interval of "
+    "the largest magnitude from the other lines (JCGM 100 4.3.7): it holds for every "
+    "temperature error within the bound")
+
+
+def temperature_slope_bound(x: float, d_c: float, bound_c: float) -> float:
+    """The reach b of a temperature slope x = ΔY/(T_i − T_rt) (7.2.5's relative ΔK, 7.2.14's
+    ΔB) read with the gyro's temperature at the set point off by up to ``bound_c`` (the room
+    point read as stated): the response over the true span d + δ was divided by the nominal
+    d, so x = β·(d + δ)/d and |β − x| = |x|·|δ|/|d + δ| ≤ |x|·B/(|d| − B) for a response
+    linear in T (a curvature k₂ adds k₂·B against the chord's k₁ + k₂·d: 0.4 % of K_t on the
+    MEMS bench, inside the noise's u). ∞ where |d| ≤ B (no span is certain).
+
+    >>> round(temperature_slope_bound(1.6e-4, 50.0, 3.0), 9), temperature_slope_bound(1.0, 2.0, 3.0)
+    (1.0213e-05, inf)
+    """
+    return abs(x) * bound_c / (abs(d_c) - bound_c) if abs(d_c) > bound_c else math.inf
+
+
+def _slope_bounds(slopes, temps, rt: int, others: list[int], bound_c: float, rest) -> dict | None:
+    """The ``bounded`` argument of :func:`gonio.result.gum.max_magnitude_statement` for
+    7.2.5/7.2.14's slopes: the line ``dT`` at its bound at every point
+    (:func:`temperature_slope_bound`), ``rest`` the points' results without it; None where a
+    span is not longer than the bound or no bound is stated (the root-sum-square line then)."""
+    b = [temperature_slope_bound(slopes[j], temps[j] - temps[rt], bound_c) for j in others]
+    if not bound_c > 0 or not all(math.isfinite(v) for v in b):
+        return None
+    return {"symbol": "dT", "rest": rest, "b": b, "basis": TEMPERATURE_SLOPE_BOUND_BASIS}
+
+
 def sf_temperature_sensitivity(ctx: Context) -> Item:
     """JJF 1535 7.2.5 eq (11): K_t = max_i |(K_i − K_rt)/(K_rt (T_i − T_rt))|.
 
     Uncertainty: the noise of K_i and K_rt (type A) and the gyro's temperature error at T_i
     (:func:`_temperature_bound_c`: the chamber's deviation, Table 2 ±2 °C, and the gyro's
-    place in the volume, ± half the uniformity, bounds added; rectangular). K_i's noise is the least-squares slope's noise from
+    place in the volume, ± half the uniformity, bounds added; rectangular in the budget, at
+    its bound in the statement: :func:`temperature_slope_bound`, the gyro cold at the hot set
+    point shortens the span it divides by). K_i's noise is the least-squares slope's noise from
     its rate points' means (``se_K_noise`` of :func:`calibrations`), not the line's residual
     standard error: the residuals hold the gyro's nonlinearity, the same at every
     temperature of the model, which biases K_i and K_rt alike and cancels in their ratio —
@@ -495,11 +531,20 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
             type_b("dT", Ts[j] - Ts[rt], _temperature_bound_c(ctx), "rectangular",
                    source=rg.TEMPERATURE_BOUND_SOURCE)])
 
-    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
+    def point_rest(j):      # the same without the temperature line (its bound beside)
+        (u_j, nu_j), (u_rt, nu_rt) = se(cals[j]), se(cals[rt])
+        return gum(lambda a, b: (a - b) / (b * (Ts[j] - Ts[rt])), [
+            from_u("K_i", cals[j]["fit"].K, u_j, dof=nu_j),
+            from_u("K_rt", cals[rt]["fit"].K, u_rt, dof=nu_rt)])
+
+    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes, the gyro's
+    # temperature error at each set point at its bound
     others = [j for j in range(len(Ts)) if j != rt]
     pts = [point(j) for j in others]
-    value, u, iv = max_magnitude_statement(pts[others.index(i)], [slopes[j] for j in others],
-                                           pts, value)
+    value, u, iv = max_magnitude_statement(
+        pts[others.index(i)], [slopes[j] for j in others], pts, value,
+        bounded=_slope_bounds(slopes, Ts, rt, others, _temperature_bound_c(ctx),
+                              [point_rest(j) for j in others]))
     return Item("sf_temperature_sensitivity", title, clause, unit, value, uncertainty=u, details={
         "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt,
         "se_K_residual": [c["se_K"] for c in cals], **iv})
@@ -937,7 +982,8 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
     (reading taken; K̄ of 7.2.1 when absent). Earth rate and g cancel (same mounting).
 
     Uncertainty: the record means (block type A), the gyro's temperature error on T_i
-    (:func:`_temperature_bound_c`, as 7.2.5), the bias drift between the records."""
+    (:func:`_temperature_bound_c`, as 7.2.5: at its bound in the statement), the bias drift
+    between the records."""
     title, clause, unit = "bias temperature sensitivity B_t", "7.2.14", "(°/h)/°C"
     miss = _need(ctx, "bias_temperature", "bias_temperature_sensitivity", title, clause, unit)
     if miss:
@@ -968,11 +1014,20 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
             from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=DOF_U_WITHIN_10PCT,
                    source="bias drift between the two records (Allan fit: RRW, BI)")])
 
-    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
+    def point_rest(j):      # the same without the temperature line (its bound beside)
+        return gum(lambda a, b, dr: (a - b + dr) / (T[j] - T[rt]), [
+            from_u("B_i", B[j], U[j][0], dof=U[j][1]),
+            from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1]),
+            from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=DOF_U_WITHIN_10PCT)])
+
+    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes, the gyro's
+    # temperature error at each set point at its bound (as 7.2.5)
     others = [j for j in range(len(T)) if j != rt]
     pts = [point(j) for j in others]
-    value, u, iv = max_magnitude_statement(pts[others.index(i)], [slopes[j] for j in others],
-                                           pts, value)
+    value, u, iv = max_magnitude_statement(
+        pts[others.index(i)], [slopes[j] for j in others], pts, value,
+        bounded=_slope_bounds(slopes, T, rt, others, _temperature_bound_c(ctx),
+                              [point_rest(j) for j in others]))
     return Item("bias_temperature_sensitivity", title, clause, unit, value, uncertainty=u,
                 details={"temperatures_c": T, "bias_dph": B, "slopes": slopes, "room_index": rt,
                          **iv})
