@@ -126,7 +126,10 @@ def test_bound_condition_states_k_of_the_rest(run):
     for key, it in _items(run).items():
         u = it["uncertainty"]
         bc = it["details"].get("bound_condition")
-        if not bc:
+        if not bc or "reach_rest" in bc or "b" in bc:
+            # value ± (a + k·u_rest) only: a dispersion's one-sided limit (IEC noise items,
+            # tests/test_rate_bound_u_c.py) and the extreme of magnitudes with each point's
+            # bound (JJF K_t, B_t, tests/test_jjf_slope_bound.py) state no k
             continue
         rest = _rows(u, skip=set(bc["a_lines"]))
         u_rest = math.sqrt(sum(c * c for c, _ in rest))
