@@ -102,3 +102,33 @@ def test_the_bound_is_exact_for_a_linear_response():
     x = beta * (d - B) / d
     assert temperature_slope_bound(x, d, B) == pytest.approx(beta - x, rel=1e-12)
     assert math.isinf(temperature_slope_bound(1.0, 2.0, B))
+
+
+def test_each_points_rest_is_its_model_without_the_bounded_line():
+    """The u_i, ν_i of the bound condition are each point's budget less the line ``dT``
+    (gonio.result.gum.rest_of): the same as the model evaluated again without that input (the
+    slope (a − b)/(b·d) at d's value), u by JCGM 100 5.1.2 and ν by Welch–Satterthwaite; and
+    max_magnitude_statement's figures carry them."""
+    from gonio.kit import from_u, gum, type_b
+    from gonio.result.gum import max_magnitude_statement, rest_of
+
+    pts, rest2, x = [], [], []
+    for Ki, uK, nu, d in ((1.62e-4, 2e-8, 7, 45.0), (1.50e-4, 3e-8, 12, -60.0)):
+        pts.append(gum(lambda a, b, t: (a - b) / (b * t), [
+            from_u("K_i", Ki, uK, dof=nu), from_u("K_rt", 1.55e-4, 1.5e-8, dof=9),
+            type_b("dT", d, 3.0, "rectangular")]))
+        rest2.append(gum(lambda a, b: (a - b) / (b * d), [
+            from_u("K_i", Ki, uK, dof=nu), from_u("K_rt", 1.55e-4, 1.5e-8, dof=9)]))
+        x.append((Ki - 1.55e-4) / (1.55e-4 * d))
+    for p, q in zip(pts, rest2):
+        ur, nr = rest_of(p, ("dT",))
+        assert ur == pytest.approx(q.u_c, rel=1e-9)
+        assert nr == pytest.approx(q.nu_eff, rel=1e-9)
+        assert ur < p.u_c
+    b = [1e-6, 2e-6]
+    _, u, fig = max_magnitude_statement(pts[0], x, pts, max(abs(v) for v in x),
+                                        bounded={"symbol": "dT", "b": b, "basis": "test"})
+    bc = fig["bound_condition"]
+    assert bc["u_rest"] == pytest.approx([q.u_c for q in rest2], rel=1e-9)
+    assert bc["nu_rest"] == pytest.approx([q.nu_eff for q in rest2], rel=1e-9)
+    assert bc["b"] == b and u.interval[1] == pytest.approx(bc["upper"])

@@ -210,8 +210,7 @@ def dispersion_bound_statement(s: float, u: Uncertainty, bounded_rel: dict, p: f
         raise GonioError(f"bound-condition statement: line {big[0]!r} bounds a relative error "
                          f"of {bounded[big[0]]:g}, not below 1: the dispersion has no upper "
                          f"limit")
-    u_rest = math.sqrt(sum(float(c.get("contribution") or 0.0) ** 2
-                           for sym, c in rows.items() if sym not in bounded))
+    u_rest = rest_of(u, bounded)[0]
     if not u_rest > 0:
         return dispersion_uncertainty(s, u, p), {}
     nu_rest = 0.5 * (s / u_rest) ** 2
@@ -227,6 +226,34 @@ def dispersion_bound_statement(s: float, u: Uncertainty, bounded_rel: dict, p: f
                        K_SOURCE_BOUND_CHI2, interval=(0.0, upper),
                        u_c_of="the GUM budget (the bounded lines as rectangular "
                               "distributions); the bound-condition limit is the statement"), parts
+
+
+def rest_of(u: Uncertainty, symbols) -> tuple[float, float]:
+    """(u_rest, ν_rest) of ``u``'s budget less the lines ``symbols`` (a bound condition's
+    bounded lines, stated at their bound beside it): u_rest the root sum square of the other
+    lines' contributions |c_i|·u(x_i) (JCGM 100 5.1.2, the lines independent), ν_rest their
+    Welch–Satterthwaite ν (JCGM 100 G.4.1, eq. (G.2b); a line without ν infinite; ∞ where
+    none has a finite ν or u_rest is 0). The same numbers as the model evaluated without
+    those inputs: the other lines' sensitivity coefficients are taken at the inputs' values.
+
+    >>> u = Uncertainty([{"symbol": "a", "contribution": 3.0, "dof": 2.0},
+    ...                  {"symbol": "dT", "contribution": 12.0, "dof": None},
+    ...                  {"symbol": "b", "contribution": 4.0, "dof": None}],
+    ...                 13.0, 26.0, None, 2.0, None, 0.95)
+    >>> ur, nr = rest_of(u, ("dT",))
+    >>> ur, round(nr, 3)                       # 5⁴ / (3⁴/2)
+    (5.0, 15.432)
+    """
+    from uncertainty import welch_satterthwaite
+
+    drop = set(symbols)
+    rows = [(float(c.get("contribution") or 0.0),
+             math.inf if c.get("dof") is None else float(c["dof"]))
+            for c in u.components if str(c.get("symbol")) not in drop]
+    u_rest = math.sqrt(sum(c * c for c, _ in rows))
+    if not u_rest > 0:
+        return 0.0, math.inf
+    return u_rest, welch_satterthwaite(u_rest, [c for c, _ in rows], [n for _, n in rows])
 
 
 def budget_nu(u: Uncertainty) -> float:
@@ -279,13 +306,14 @@ def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
     point measured with a smaller u shows that the extreme is at least that). The third
     element: the interval's figures and its points (x_i, u_i, ν_i) for the item's details.
 
-    ``bounded`` ({"symbol": s, "rest": [the points' results without that line], "b": [b_i],
-    "basis": text}): a bounded error of each point at its bound, the bound condition of an
-    extreme (JCGM 100 4.3.7; :func:`uncertainty.extreme.max_abs_interval`'s ``bound``): the
-    interval is [max(0, max_i(|x_i| − c_L u_i − b_i)), max_i(|x_i| + c_H u_i + b_i)] with u_i,
-    ν_i those of the points' other lines, which holds max_i |μ_i| for every error within the
-    bounds, where a root-sum-square line at its bound does not (JJF 1535 7.2.5 with the gyro
-    cold at the hot set point: 24 of 40). Its parts go to the details' ``bound_condition``
+    ``bounded`` ({"symbol": s, "b": [b_i], "basis": text}): a bounded error of each point at
+    its bound, the bound condition of an extreme (JCGM 100 4.3.7;
+    :func:`uncertainty.extreme.max_abs_interval`'s ``bound``): the interval is
+    [max(0, max_i(|x_i| − c_L u_i − b_i)), max_i(|x_i| + c_H u_i + b_i)] with u_i, ν_i those of
+    each point's other lines (:func:`rest_of`: its budget less the line ``s``), which holds
+    max_i |μ_i| for every error within the bounds, where a root-sum-square line at its bound
+    does not (JJF 1535 7.2.5 with the gyro cold at the hot set point: 24 of 40). Its parts go
+    to the details' ``bound_condition``
     ({"a_lines": {s: max b_i}, "b": [b_i], "u_rest": [u_i], "nu_rest": [ν_i], "basis"}): the
     u_c of ``u`` (the line rectangular) is then kept beside, not stated
     (:func:`gonio.result.statement.u_c_certified`)."""
@@ -294,21 +322,25 @@ def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
     def dof(q):
         return math.inf if q.nu_eff is None or not math.isfinite(q.nu_eff) else max(1.0, q.nu_eff)
 
-    used = points if not bounded else bounded["rest"]
     b = [0.0] * len(points) if not bounded else [float(v) for v in bounded["b"]]
-    if len(used) != len(points) or len(b) != len(points):
-        raise ValueError("max_magnitude_statement: one rest result and one bound per point")
-    nu = [dof(q) for q in used]
-    r = max_abs_interval(np.asarray(x, dtype=float), [q.u_c for q in used], nu, bound=b)
+    if len(b) != len(points):
+        raise ValueError("max_magnitude_statement: one bound per point")
+    if bounded:
+        rest = [rest_of(q, (bounded["symbol"],)) for q in points]
+        us = [r_[0] for r_ in rest]
+        nu = [math.inf if not math.isfinite(r_[1]) else max(1.0, r_[1]) for r_ in rest]
+    else:
+        us, nu = [float(q.u_c) for q in points], [dof(q) for q in points]
+    r = max_abs_interval(np.asarray(x, dtype=float), us, nu, bound=b)
     if not r.upper > r.lower:       # no uncertainty at all (a noise-free bench): no interval
         return float(value), u, {}
     value = min(max(float(value), r.lower), r.upper)
     figures = {"max_abs_interval": {**r.to_dict(), "x": [float(v) for v in x],
-                                    "u": [float(q.u_c) for q in used], "nu": nu}}
+                                    "u": us, "nu": nu}}
     if bounded and any(v > 0 for v in b):
         figures["bound_condition"] = {
             "a_lines": {bounded["symbol"]: max(b)}, "b": b,
-            "u_rest": [float(q.u_c) for q in used], "nu_rest": nu,
+            "u_rest": us, "nu_rest": nu,
             "U": r.upper - value, "upper": r.upper, "basis": bounded["basis"]}
     return value, replace(u, U=r.upper - value, k=None, nu_eff=None,
                           coverage_probability=r.p, k_source=K_SOURCE_MAX_MAGNITUDE,

@@ -482,15 +482,16 @@ def temperature_slope_bound(x: float, d_c: float, bound_c: float) -> float:
     return abs(x) * bound_c / (abs(d_c) - bound_c) if abs(d_c) > bound_c else math.inf
 
 
-def _slope_bounds(slopes, temps, rt: int, others: list[int], bound_c: float, rest) -> dict | None:
+def _slope_bounds(slopes, temps, rt: int, others: list[int], bound_c: float) -> dict | None:
     """The ``bounded`` argument of :func:`gonio.result.gum.max_magnitude_statement` for
     7.2.5/7.2.14's slopes: the line ``dT`` at its bound at every point
-    (:func:`temperature_slope_bound`), ``rest`` the points' results without it; None where a
-    span is not longer than the bound or no bound is stated (the root-sum-square line then)."""
+    (:func:`temperature_slope_bound`; each point's other lines are its budget less ``dT``);
+    None where a span is not longer than the bound or no bound is stated (the root-sum-square
+    line then)."""
     b = [temperature_slope_bound(slopes[j], temps[j] - temps[rt], bound_c) for j in others]
     if not bound_c > 0 or not all(math.isfinite(v) for v in b):
         return None
-    return {"symbol": "dT", "rest": rest, "b": b, "basis": TEMPERATURE_SLOPE_BOUND_BASIS}
+    return {"symbol": "dT", "b": b, "basis": TEMPERATURE_SLOPE_BOUND_BASIS}
 
 
 def sf_temperature_sensitivity(ctx: Context) -> Item:
@@ -531,20 +532,13 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
             type_b("dT", Ts[j] - Ts[rt], _temperature_bound_c(ctx), "rectangular",
                    source=rg.TEMPERATURE_BOUND_SOURCE)])
 
-    def point_rest(j):      # the same without the temperature line (its bound beside)
-        (u_j, nu_j), (u_rt, nu_rt) = se(cals[j]), se(cals[rt])
-        return gum(lambda a, b: (a - b) / (b * (Ts[j] - Ts[rt])), [
-            from_u("K_i", cals[j]["fit"].K, u_j, dof=nu_j),
-            from_u("K_rt", cals[rt]["fit"].K, u_rt, dof=nu_rt)])
-
     # a magnitude, the largest |slope|: the interval of the extreme of magnitudes, the gyro's
     # temperature error at each set point at its bound
     others = [j for j in range(len(Ts)) if j != rt]
     pts = [point(j) for j in others]
     value, u, iv = max_magnitude_statement(
         pts[others.index(i)], [slopes[j] for j in others], pts, value,
-        bounded=_slope_bounds(slopes, Ts, rt, others, _temperature_bound_c(ctx),
-                              [point_rest(j) for j in others]))
+        bounded=_slope_bounds(slopes, Ts, rt, others, _temperature_bound_c(ctx)))
     return Item("sf_temperature_sensitivity", title, clause, unit, value, uncertainty=u, details={
         "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt,
         "se_K_residual": [c["se_K"] for c in cals], **iv})
@@ -1014,20 +1008,13 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
             from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=DOF_U_WITHIN_10PCT,
                    source="bias drift between the two records (Allan fit: RRW, BI)")])
 
-    def point_rest(j):      # the same without the temperature line (its bound beside)
-        return gum(lambda a, b, dr: (a - b + dr) / (T[j] - T[rt]), [
-            from_u("B_i", B[j], U[j][0], dof=U[j][1]),
-            from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1]),
-            from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=DOF_U_WITHIN_10PCT)])
-
     # a magnitude, the largest |slope|: the interval of the extreme of magnitudes, the gyro's
     # temperature error at each set point at its bound (as 7.2.5)
     others = [j for j in range(len(T)) if j != rt]
     pts = [point(j) for j in others]
     value, u, iv = max_magnitude_statement(
         pts[others.index(i)], [slopes[j] for j in others], pts, value,
-        bounded=_slope_bounds(slopes, T, rt, others, _temperature_bound_c(ctx),
-                              [point_rest(j) for j in others]))
+        bounded=_slope_bounds(slopes, T, rt, others, _temperature_bound_c(ctx)))
     return Item("bias_temperature_sensitivity", title, clause, unit, value, uncertainty=u,
                 details={"temperatures_c": T, "bias_dph": B, "slopes": slopes, "room_index": rt,
                          **iv})
