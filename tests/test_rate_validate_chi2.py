@@ -96,3 +96,31 @@ def test_interval_item_judged_against_its_stated_p():
         assert c.statistic == "interval" and c.hits == 90 and abs(c.p_stated - p) < 1e-12
         assert ("below its p" in c.flags) is flagged
         assert f"stated p {p:.3f}" in format_coverage(pd.DataFrame([c.__dict__]), "t")
+
+
+def test_bound_condition_items_are_marked_in_the_study_table():
+    """An item whose statement holds a bounded effect at its bound (details' bound_condition:
+    JJF 7.2.5 K_t and 7.2.14 B_t, the chamber's temperature bound) is recorded as such per
+    trial and the table says so ("[bound held]", and in how many trials where not all); an
+    item stated by k·u_c of its budget is not marked."""
+    from gonio.analysis.coverage import coverage_table_from
+
+    spec = get("jjf1535-2015")
+    with tempfile.TemporaryDirectory() as d:
+        proto = spec.load_protocol(str(reduced_protocol(spec.key, Path(d) / "r.toml")))
+    r = trial_records(spec.key, study_bench(), proto, 7)
+    for key in ("sf_temperature_sensitivity", "bias_temperature_sensitivity"):
+        assert r[key].get("bound") is True, key
+    assert "bound" not in r["scale_factor"] and "bound" not in r["sf_repeatability"]
+    plain = {k: {x: v for x, v in rec.items() if x != "bound"} for k, rec in r.items()}
+    df = coverage_table_from([r, r, plain])
+    rows = df.set_index("key")
+    assert rows.loc["sf_temperature_sensitivity", "bound_trials"] == 2
+    assert rows.loc["scale_factor", "bound_trials"] == 0
+    txt = format_coverage(df, "t").splitlines()
+    line = next(s for s in txt if s.startswith("sf_temperature_sensitivity"))
+    assert "[bound held in 2 of 3]" in line, line
+    assert "[bound held" not in next(s for s in txt if s.startswith("scale_factor "))
+    full = format_coverage(coverage_table_from([r, r]), "t").splitlines()
+    assert "[bound held]" in next(s for s in full
+                                  if s.startswith("bias_temperature_sensitivity"))

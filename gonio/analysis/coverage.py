@@ -23,7 +23,7 @@ from gonio.errors import GonioError
 
 __all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two_sided",
            "within", "binomial_u", "coverage", "wilson_interval", "ItemCoverage",
-           "item_coverage", "spawn_seed", "chi_square_z", "stated_record",
+           "item_coverage", "spawn_seed", "chi_square_z", "stated_record", "bound_record",
            "coverage_table_from", "format_coverage"]
 
 #: Wilson-interval coverage factor (95 %).
@@ -244,7 +244,11 @@ class ItemCoverage:
     trials of both kinds. ``p_stated``: the mean coverage probability the trials' intervals
     state (an outcome range states its own, above 95 %): coverage is judged against it
     (flag ``below its p`` where the Clopper–Pearson upper end is under it); for a
-    discrete, skewed outcome z on u_c is not normal and its spread is information only."""
+    discrete, skewed outcome z on u_c is not normal and its spread is information only.
+    ``bound_trials``: the trials whose statement holds a bounded effect at its bound
+    (:func:`bound_record`): their U is not k·u_c of a root-sum-square budget, so z on u_c
+    sits well inside ±2 at conditions inside the bound and its spread below 1 is that bound
+    held, by design (in a fixed case at the bound, the noise's spread alone)."""
 
     key: str
     clause: str
@@ -266,6 +270,7 @@ class ItemCoverage:
     z_uc_sd: float | None = None
     max_norm_error_uc: float | None = None
     p_stated: float | None = None
+    bound_trials: int = 0
 
 
 def _trial_judged(v: float, t: float, U: float, u: float, stated: dict | None):
@@ -349,7 +354,7 @@ def _spread(z) -> tuple[float | None, float | None]:
 
 def item_coverage(records: list[tuple[float, float, float, float]], key: str = "",
                   clause: str = "", stated: list | None = None,
-                  judge_spread: bool = True) -> ItemCoverage:
+                  judge_spread: bool = True, bound: list | None = None) -> ItemCoverage:
     """Coverage of one item from (value, truth, U, u_c) per seed; ``stated`` (one entry per
     record, None for a value ± U) the interval a trial's item was stated by alone and the ν
     of its χ² model (:func:`_trial_judged`): the interval must hold the truth, and the
@@ -357,7 +362,9 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
     is a probability of; z on u_c (s in its denominator, unbounded for few degrees of
     freedom) is kept beside it. ``judge_spread`` False: no ``over-wide`` flag (a study case
     at one fixed condition, where a Type B line is one fixed offset and z's spread is the
-    noise's alone: coverage is the test there).
+    noise's alone: coverage is the test there). ``bound``: per record, whether its
+    statement holds a bounded effect at its bound (:func:`bound_record`), counted in
+    ``bound_trials``.
 
     >>> c = item_coverage([(1.0, 1.1, 0.2, 0.1), (1.0, 1.3, 0.2, 0.1)])
     >>> c.hits, c.coverage, round(c.u_coverage, 4)
@@ -392,7 +399,8 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
     return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
                         cp_lo, cp_hi, z_mean, z_sd,
-                        tuple(flags), statistic, **uc, p_stated=p_stated)
+                        tuple(flags), statistic, **uc, p_stated=p_stated,
+                        bound_trials=sum(bool(b) for b in (bound or [])))
 
 
 def stated_record(u) -> dict:
@@ -414,6 +422,20 @@ def stated_record(u) -> dict:
             **({"p": float(p)} if p is not None and math.isfinite(float(p)) else {})}
 
 
+def bound_record(item) -> dict:
+    """{"bound": True} for an item whose statement holds a bounded effect at its bound (its
+    details' ``bound_condition``: :func:`gonio.result.gum.dispersion_bound_statement`,
+    :func:`gonio.result.gum.max_magnitude_statement`'s ``bounded``, a value ± (a + k·u_rest)),
+    {} otherwise: the study's table marks the item (:class:`ItemCoverage`'s ``bound_trials``).
+
+    >>> from types import SimpleNamespace as NS
+    >>> bound_record(NS(details={"bound_condition": {"U": 1.0}})), bound_record(NS(details={}))
+    ({'bound': True}, {})
+    """
+    return {"bound": True} if (getattr(item, "details", None) or {}).get("bound_condition") \
+        else {}
+
+
 def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None,
                         judge_spread: bool = True) -> "pd.DataFrame":
     """Per item over the trials (in order): :class:`ItemCoverage` rows. A trial is {item:
@@ -424,6 +446,7 @@ def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None
 
     recs: dict[str, list] = {}
     stated: dict[str, list] = {}
+    bounds: dict[str, list] = {}
     clauses: dict[str, str] = {}
     for tr in trials:
         for key, r in tr.items():
@@ -437,7 +460,8 @@ def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None
                      "z_level": r.get("z_level")}
                     if r.get("interval")
                     else None)
-    rows = [item_coverage(v, k, clauses[k], stated[k], judge_spread).__dict__
+                bounds.setdefault(key, []).append(bool(r.get("bound")))
+    rows = [item_coverage(v, k, clauses[k], stated[k], judge_spread, bounds[k]).__dict__
             for k, v in recs.items()]
     return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
 
@@ -459,9 +483,12 @@ def format_coverage(df, title: str) -> str:
         on_uc = "" if st in ("u_c", None) or st != st else (
             f"  [{_STAT_LABEL.get(st, st)}{p_txt}; z on u_c: mean "
             f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
+        nb = int(getattr(r, "bound_trials", 0) or 0)
+        bound = "" if not nb else (
+            "  [bound held]" if nb == r.n else f"  [bound held in {nb} of {r.n}]")
         lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
                      f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
-                     f"{r.max_norm_error:7.2f}{on_uc}{flag}")
+                     f"{r.max_norm_error:7.2f}{on_uc}{bound}{flag}")
     lines.append("cover: fraction of trials with |value - truth| <= U, or with the truth inside "
                  "the stated interval for an item stated by its interval alone (95 % "
                  "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
@@ -471,5 +498,7 @@ def format_coverage(df, title: str) -> str:
                  "level at the truth (Phi^-1 of the truth's probability integral transform); "
                  "flagged: coverage < 90 % "
                  "(under-covers), sd z < 0.3 (over-wide U), the Clopper-Pearson upper end "
-                 "below the mean probability the intervals state (below its p)")
+                 "below the mean probability the intervals state (below its p); "
+                 "[bound held]: U holds a bounded effect at its bound (JCGM 100 4.3.7), not "
+                 "a root-sum-square line, so z sd on u_c below 1 is that bound, by design")
     return "\n".join(lines) + "\n"

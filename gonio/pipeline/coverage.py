@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gonio.analysis.coverage import (ItemCoverage, coverage_table_from, format_coverage,
-                                     item_coverage, level_z_at, level_z_discrete, spawn_seed,
-                                     stated_record,
+from gonio.analysis.coverage import (ItemCoverage, bound_record, coverage_table_from,
+                                     format_coverage, item_coverage, level_z_at,
+                                     level_z_discrete, spawn_seed, stated_record,
                                      wilson_interval)
 from gonio.atomic import write_text
 from gonio.errors import GonioError
@@ -144,7 +144,7 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
         out[key] = {"clause": it.clause,
                     **({"value": float(it.value), "truth": float(t),
                         "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
-                        **stated_record(it.uncertainty),
+                        **stated_record(it.uncertainty), **bound_record(it),
                         **_level_record(it, float(t) if ok else None, int(seed), key)}
                        if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
     return out

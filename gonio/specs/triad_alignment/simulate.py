@@ -81,7 +81,7 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
     rate table's errors drawn from the seed (:func:`for_trial`; its rate error scales every
     K) and the K values carry the table's Type B line as ``calibrate`` gives it; False: the
     bench file's table in every trial."""
-    from gonio.analysis.coverage import stated_record
+    from gonio.analysis.coverage import bound_record, stated_record
     from gonio.specs.triad_alignment.calibration import (fit_alignment, thermal_flicker,
                                                          thermal_items, thermal_long_term)
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
@@ -104,5 +104,5 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
         out[key] = {"clause": it.clause, "value": float(it.value),
                     "truth": float(true[key]["value"]),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
-                    **stated_record(it.uncertainty)}
+                    **stated_record(it.uncertainty), **bound_record(it)}
     return out

@@ -50,8 +50,8 @@ from typing import Mapping
 
 import numpy as np
 
-from gonio.analysis.coverage import (coverage_table_from, format_coverage, spawn_seed,
-                                     stated_record)
+from gonio.analysis.coverage import (bound_record, coverage_table_from, format_coverage,
+                                     spawn_seed, stated_record)
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.analysis import RATE_ERROR_BOUND_K, table_type_b_cov
 from gonio.specs.triad_alignment.bench import TriadBench, load_triad_bench, load_triad_protocol
@@ -206,7 +206,7 @@ def triad_trial(seed: int, protocol: str = "triad-alignment", bench="mems-triad"
         out[key] = {"clause": it.clause, "value": float(it.value),
                     "truth": float(leak.get(key, truth[key]["value"])),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
-                    **stated_record(it.uncertainty)}
+                    **stated_record(it.uncertainty), **bound_record(it)}
         gum = ((it.details or {}).get("not_certified") or {}).get("gum")
         if gum:
             out[f"{key} {GUM_SUFFIX}"] = gum_record(out[key], gum)
