@@ -142,3 +142,32 @@ def test_root_mean_square_removes_the_mean_of_standard_deviations_bias(study_rec
     assert abs(low + 1 / (4 * nu_m)) <= 3 * se_low, (low, -1 / (4 * nu_m), se_low)
     rms_low = np.mean(np.sqrt(rms2)) / sigma - 1                   # ≈ −1/(4ν), ν = Qν_m
     assert abs(rms_low + 1 / (4 * nu_true)) <= 3 * se_low, (rms_low, se_low)
+
+
+@pytest.mark.xfail(strict=True, reason="known: the records' ν̂ is larger where B_s happens to "
+                   "read low (corr(s², ν̂) ≈ −0.5 on the study bench), so the stated limit "
+                   "holds σ in about 94 % of sets, not 95 % (docs/jjf1535-readings.md, "
+                   "7.2.10, 'Open'); passes once the statement accounts for it")
+def test_stated_limit_reaches_95_percent_on_4000_sets():
+    """The statement's coverage resolved to ±0.4 %: 4000 sets of Q = 3 records drawn from the
+    exact covariance; the Clopper–Pearson interval of the stated limit's coverage must reach
+    95 %. With the true ν (Satterthwaite of the exact covariance) the same limit covers about
+    95.7 % (checked here, so the shortfall is the estimated ν's, not the χ² form's)."""
+    cov, cov_b = _study_covariance()
+    L = np.linalg.cholesky(cov)
+    rng = np.random.default_rng(20261204)
+    n = cov_b.shape[0]
+    M = np.eye(n) - 1.0 / n
+    sigma2 = np.trace(M @ cov_b @ M) / (n - 1)
+    nu_true = 3 * _satterthwaite(cov_b)
+    hits = hits_true = 0
+    N = 4000
+    for _ in range(N):
+        s = [L @ rng.standard_normal(cov.shape[0]) for _ in range(3)]
+        bs2 = float(np.mean([rg.block_mean_stability(x, 1.0, 10) ** 2 for x in s]))
+        nu = rg.bias_stability_dof(s, 10)
+        hits += sigma2 <= bs2 * nu / chi2.ppf(0.05, nu)
+        hits_true += sigma2 <= bs2 * nu_true / chi2.ppf(0.05, nu_true)
+    assert binomtest(hits_true, N).proportion_ci(method="exact").high >= 0.95
+    ci = binomtest(hits, N).proportion_ci(method="exact")
+    assert ci.high >= 0.95, (hits / N, ci)
