@@ -144,30 +144,59 @@ def test_root_mean_square_removes_the_mean_of_standard_deviations_bias(study_rec
     assert abs(rms_low + 1 / (4 * nu_true)) <= 3 * se_low, (rms_low, se_low)
 
 
-@pytest.mark.xfail(strict=True, reason="known: the records' ν̂ is larger where B_s happens to "
-                   "read low (corr(s², ν̂) ≈ −0.5 on the study bench), so the stated limit "
-                   "holds σ in about 94 % of sets, not 95 % (docs/jjf1535-readings.md, "
-                   "7.2.10, 'Open'); passes once the statement accounts for it")
-def test_stated_limit_reaches_95_percent_on_4000_sets():
-    """The statement's coverage resolved to ±0.4 %: 4000 sets of Q = 3 records drawn from the
-    exact covariance; the Clopper–Pearson interval of the stated limit's coverage must reach
-    95 %. With the true ν (Satterthwaite of the exact covariance) the same limit covers about
-    95.7 % (checked here, so the shortfall is the estimated ν's, not the χ² form's)."""
-    cov, cov_b = _study_covariance()
+def _sets_coverage(cov, N, seed, P=10):
+    """Over N sets of Q = 3 records drawn from ``cov`` (Cholesky): the hits of the χ² limit
+    with the estimate's ν, with the stated ν (flicker and random walk at their upper 95 %
+    limits) and with the true ν (Satterthwaite of the exact block-mean covariance)."""
     L = np.linalg.cholesky(cov)
-    rng = np.random.default_rng(20261204)
-    n = cov_b.shape[0]
+    n = cov.shape[0] // P
+    B = np.kron(np.eye(n), np.ones((1, P)) / P)
+    cov_b = B @ cov @ B.T
     M = np.eye(n) - 1.0 / n
     sigma2 = np.trace(M @ cov_b @ M) / (n - 1)
     nu_true = 3 * _satterthwaite(cov_b)
-    hits = hits_true = 0
-    N = 4000
+    rng = np.random.default_rng(seed)
+    hits = {"estimate": 0, "stated": 0, "true": 0}
     for _ in range(N):
         s = [L @ rng.standard_normal(cov.shape[0]) for _ in range(3)]
-        bs2 = float(np.mean([rg.block_mean_stability(x, 1.0, 10) ** 2 for x in s]))
-        nu = rg.bias_stability_dof(s, 10)
-        hits += sigma2 <= bs2 * nu / chi2.ppf(0.05, nu)
-        hits_true += sigma2 <= bs2 * nu_true / chi2.ppf(0.05, nu_true)
-    assert binomtest(hits_true, N).proportion_ci(method="exact").high >= 0.95
-    ci = binomtest(hits, N).proportion_ci(method="exact")
-    assert ci.high >= 0.95, (hits / N, ci)
+        bs2 = float(np.mean([rg.block_mean_stability(x, 1.0, P) ** 2 for x in s]))
+        for k, nu in (("estimate", rg.bias_stability_dof(s, P)),
+                      ("stated", rg.bias_stability_dof(s, P, 0.95)), ("true", nu_true)):
+            hits[k] += sigma2 <= bs2 * nu / chi2.ppf(0.05, nu)
+    return {k: binomtest(h, N).proportion_ci(method="exact") for k, h in hits.items()}
+
+
+def test_stated_nu_reaches_95_percent_where_the_estimate_does_not():
+    """4000 sets on the study bench's noise resolve coverage to ±0.4 %: the limit with the
+    estimate's ν holds σ about 94 % of the time (its Clopper–Pearson interval below 95 %:
+    ν̂ is large where B_s reads low), the stated one (flicker and random walk at their upper
+    95 % limits, as the item takes it) reaches 95 %, and so does the true ν's."""
+    from gonio.specs.jjf1535.items import BIAS_STABILITY_CORRELATED_UPPER_P
+
+    assert BIAS_STABILITY_CORRELATED_UPPER_P == 0.95
+    cov, _ = _study_covariance()
+    ci = _sets_coverage(cov, 4000, 20261204)
+    assert ci["estimate"].high < 0.95, ci["estimate"]
+    assert ci["stated"].high >= 0.95 and ci["stated"].low < 0.985, ci["stated"]
+    assert ci["true"].high >= 0.95
+
+
+def test_stated_nu_reaches_95_percent_with_ten_times_the_bias_instability():
+    """Strongly correlated block means (the Gauss–Markov sum of the study bench ×10, ν ≈ 55):
+    the estimate's limit held σ about 91 % of the time; the stated one reaches 95 %."""
+    from gonio.bench.rate_gyro import NoiseState
+    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.units import S_PER_H
+
+    g = study_bench("mems-adxrs610").gyro
+    ns = NoiseState(g, np.random.default_rng(0), enabled=True)
+    i = np.arange(600)
+    lag = np.abs(i[:, None] - i[None, :])
+    cov = np.eye(600) * (g.arw_deg_sqrt_h / math.sqrt(S_PER_H)) ** 2
+    for tau, s in zip(ns.taus, ns.sig):
+        cov += 10.0 * s ** 2 * math.exp(-1.0 / tau) ** lag
+    t = 600.0 + i + 1.0
+    cov += (g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)) ** 2 * np.minimum.outer(t, t)
+    ci = _sets_coverage(cov, 2000, 5)
+    assert ci["estimate"].high < 0.95, ci["estimate"]
+    assert ci["stated"].high >= 0.95, ci["stated"]

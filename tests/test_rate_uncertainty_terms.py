@@ -158,11 +158,15 @@ def test_jjf_bias_repeatability_and_stability_by_hand(jjf):
     # the records' root mean square (eq (19)'s mean of standard deviations reads low; kept)
     assert bs.value == pytest.approx(math.sqrt(np.mean(np.square(rec_s))), rel=1e-9)
     assert bs.details["reading_eq19_dph"] == pytest.approx(np.mean(rec_s), rel=1e-9)
-    # one interval, from the records' effective ν (not the spread of the Q = 3 values):
+    # one interval, from the records' effective ν (not the spread of the Q = 3 values; the
+    # flicker and random walk at their upper 95 % limits):
     # u_c² = B_s²/(2ν_rec) + (B_s·u(K)/K)², ν = ½(B_s/u_c)², [0, B_s·√(ν/χ²_0.05,ν)]
     from scipy.stats import chi2
     from gonio.specs._rate_family.formulas import bias_stability_dof
-    nu_rec = bias_stability_dof([g["output"].to_numpy() for _, g in d.groupby("run")], P)
+    runs = [g["output"].to_numpy() for _, g in d.groupby("run")]
+    nu_rec = bias_stability_dof(runs, P, 0.95)
+    assert bs.details["nu_records_estimate"] == pytest.approx(bias_stability_dof(runs, P))
+    assert nu_rec < bs.details["nu_records_estimate"]
     u_c = bs.value * math.sqrt(1 / (2 * nu_rec) + r.items["scale_factor"].uncertainty.u_c ** 2
                                / K ** 2)
     assert bs.uncertainty.u_c == pytest.approx(u_c, rel=1e-6)

@@ -115,8 +115,9 @@ READINGS_ZH = {
 #: Chinese template with the groups as {1}, {2}…); see gonio.report.i18n.phrase_zh.
 PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"sampling of B_s: effective ν of the records' correlated block means \(variogram: white, "
-     r"flicker, random walk\)", "B_s 的抽样：各段记录相关分块均值的有效自由度 ν（变差图：白噪声、"
-                                 "闪烁噪声、随机游走）"),
+     r"flicker, random walk; flicker and random walk at their upper 95 % limits\)",
+     "B_s 的抽样：各段记录相关分块均值的有效自由度 ν（变差图：白噪声、闪烁噪声、随机游走；"
+     "闪烁噪声与随机游走取其 95 % 上限）"),
     (r"mean of K_m", "K_m 的平均值"),
     # the budget line of K̄'s relative u_c in an item computed with K (items._e_K)
     (r"scale factor, relative: u_c\(K\)/K̄ of 7\.2\.1, with its ν_eff",

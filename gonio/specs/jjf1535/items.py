@@ -718,6 +718,11 @@ def bias(ctx: Context) -> Item:
         "null_output": ctx.null_output})
 
 
+#: The one-sided level at which 7.2.10's ν takes the fitted flicker and random-walk
+#: coefficients (:func:`gonio.specs._rate_family.formulas.bias_stability_dof`).
+BIAS_STABILITY_CORRELATED_UPPER_P = 0.95
+
+
 def bias_stability(ctx: Context) -> Item:
     """JJF 1535 7.2.10 eqs (18), (19): B_s,m = s(P-sample block means)/K of each record, °/h,
     combined as their root mean square √(mean B_s,m²) (reading taken). Eq (19) as printed
@@ -729,8 +734,11 @@ def bias_stability(ctx: Context) -> Item:
     Uncertainty: the sampling of B_s, a mean of Q standard deviations of correlated block
     means, u = B_s/√(2ν) with the effective ν of its own records
     (:func:`gonio.specs._rate_family.formulas.bias_stability_dof`: the block means'
-    variogram fitted by white, flicker and random-walk noise; Satterthwaite), and the scale
-    factor. B_s is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone
+    variogram fitted by white, flicker and random-walk noise; Satterthwaite), the flicker
+    and random-walk coefficients at their one-sided 95 % upper confidence limits
+    (:data:`BIAS_STABILITY_CORRELATED_UPPER_P`: the estimate's ν is large where B_s reads
+    low, and its limit held σ 91–94 % of the time; the estimate is kept in the details,
+    ``nu_records_estimate``), and the scale factor. B_s is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone
     with ν = ½(B_s/u_c)² (:func:`gonio.result.gum.dispersion_uncertainty`), as K_r and B_r are: no k, no
     "± U". The spread of the Q = 3 values (ν = 2) is kept in the details; it does not set the
     interval."""
@@ -743,16 +751,20 @@ def bias_stability(ctx: Context) -> Item:
     bs = np.array([rg.block_mean_stability(r["samples"], ctx.K, P) * S_PER_H for r in recs])
     nblk = recs[0]["samples"].size // P
     value = float(np.sqrt(np.mean(bs ** 2)))
-    nu_b = rg.bias_stability_dof([r["samples"] for r in recs], P)
+    samples = [r["samples"] for r in recs]
+    nu_b = rg.bias_stability_dof(samples, P, BIAS_STABILITY_CORRELATED_UPPER_P)
     u_a = from_u("s_Bs", 0.0, value / math.sqrt(2.0 * nu_b) if math.isfinite(nu_b) else 0.0,
                  dof=nu_b, source="sampling of B_s: effective ν of the records' correlated "
-                                  "block means (variogram: white, flicker, random walk)")
+                                  "block means (variogram: white, flicker, random walk; "
+                                  "flicker and random walk at their upper 95 % limits)")
     u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", value, 0.0), u_a,
                                                 _e_K(ctx)])
     u = dispersion_uncertainty(value, u)
     return Item("bias_stability", title, clause, unit, value, uncertainty=u,
                 details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk,
-                         "nu_records": nu_b, "reading_eq19_dph": float(bs.mean()),
+                         "nu_records": nu_b,
+                         "nu_records_estimate": rg.bias_stability_dof(samples, P),
+                         "reading_eq19_dph": float(bs.mean()),
                          "spread_of_records_dph": float(bs.std(ddof=1)) if bs.size > 1
                          else None})
 
