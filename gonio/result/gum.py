@@ -319,18 +319,15 @@ def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
     (:func:`gonio.result.statement.u_c_certified`)."""
     from uncertainty.extreme import max_abs_interval
 
-    def dof(q):
-        return math.inf if q.nu_eff is None or not math.isfinite(q.nu_eff) else max(1.0, q.nu_eff)
-
     b = [0.0] * len(points) if not bounded else [float(v) for v in bounded["b"]]
     if len(b) != len(points):
         raise ValueError("max_magnitude_statement: one bound per point")
-    if bounded:
-        rest = [rest_of(q, (bounded["symbol"],)) for q in points]
-        us = [r_[0] for r_ in rest]
-        nu = [math.inf if not math.isfinite(r_[1]) else max(1.0, r_[1]) for r_ in rest]
-    else:
-        us, nu = [float(q.u_c) for q in points], [dof(q) for q in points]
+    # each point's (u, ν): its other lines' where a line is bounded, else its own result's
+    pairs = [rest_of(q, (bounded["symbol"],)) if bounded else (float(q.u_c), q.nu_eff)
+             for q in points]
+    us = [float(p_[0]) for p_ in pairs]
+    nu = [math.inf if p_[1] is None or not math.isfinite(p_[1]) else max(1.0, float(p_[1]))
+          for p_ in pairs]
     r = max_abs_interval(np.asarray(x, dtype=float), us, nu, bound=b)
     if not r.upper > r.lower:       # no uncertainty at all (a noise-free bench): no interval
         return float(value), u, {}

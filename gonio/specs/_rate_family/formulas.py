@@ -24,6 +24,7 @@ Contents
 :func:`block_variogram_model`   the fitted variogram at every lag
 :func:`block_std_dof`           effective ν of a standard deviation of correlated means
 :func:`bias_stability_dof`      effective ν of JJF (19)'s B_s from its own records
+:func:`bias_stability_dofs`     the same, stated and estimated, from one fit
 :func:`earth_rate_projection_dps`  Ω_E on a gyro axis, any orientation
 :func:`max_abs_normal_mean`     c_n = E[max |Z_i|] of n normal values
 :func:`selection_excess`        midpoint and half-width of a noisy maximum's excess
@@ -282,6 +283,20 @@ def bias_stability_dof(records, block: int, correlated_upper_p: float | None = N
     >>> round(bias_stability_dof(x, 10)), round(bias_stability_dof(x, 10, 0.95))
     (177, 126)
     """
+    return bias_stability_dofs(records, block, correlated_upper_p)[0]
+
+
+def bias_stability_dofs(records, block: int, correlated_upper_p: float | None = None
+                        ) -> tuple[float, float]:
+    """(ν stated, ν estimated) of :func:`bias_stability_dof` from one fit of the records'
+    variogram: the ν with the flicker and random-walk coefficients at their one-sided
+    ``correlated_upper_p`` upper limits (the estimate's where None) and the estimate's.
+
+    >>> rng = np.random.default_rng(1)
+    >>> [round(v) for v in bias_stability_dofs([rng.normal(size=600) for _ in range(3)],
+    ...                                        10, 0.95)]
+    [126, 177]
+    """
     P = int(block)
     means = []
     for r in records:
@@ -292,13 +307,19 @@ def bias_stability_dof(records, block: int, correlated_upper_p: float | None = N
         means.append(x[: n * P].reshape(n, P).mean(axis=1))
     d, pairs = block_mean_variogram(means)
     coef, cov = block_variogram_fit(d, pairs)
-    if correlated_upper_p is not None:
-        # flicker and random walk at their one-sided upper confidence limits, white as fitted
-        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        coef = coef + float(ndtri(correlated_upper_p)) * sd * np.array([0.0, 1.0, 1.0])
-    model = block_variogram_basis(np.arange(d.size)) @ coef
-    inv = sum(1.0 / block_std_dof(model, m.size) for m in means)
-    return math.inf if inv == 0 else len(means) ** 2 / inv
+    basis = block_variogram_basis(np.arange(d.size))
+
+    def nu_of(c) -> float:
+        inv = sum(1.0 / block_std_dof(basis @ c, m.size) for m in means)
+        return math.inf if inv == 0 else len(means) ** 2 / inv
+
+    estimate = nu_of(coef)
+    if correlated_upper_p is None:
+        return estimate, estimate
+    # flicker and random walk at their one-sided upper confidence limits, white as fitted
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return nu_of(coef + float(ndtri(correlated_upper_p)) * sd * np.array([0.0, 1.0, 1.0])), \
+        estimate
 
 
 def earth_rate_projection_dps(latitude_deg: float, axis_enu) -> float:

@@ -751,8 +751,8 @@ def bias_stability(ctx: Context) -> Item:
     bs = np.array([rg.block_mean_stability(r["samples"], ctx.K, P) * S_PER_H for r in recs])
     nblk = recs[0]["samples"].size // P
     value = float(np.sqrt(np.mean(bs ** 2)))
-    samples = [r["samples"] for r in recs]
-    nu_b = rg.bias_stability_dof(samples, P, BIAS_STABILITY_CORRELATED_UPPER_P)
+    nu_b, nu_est = rg.bias_stability_dofs([r["samples"] for r in recs], P,
+                                          BIAS_STABILITY_CORRELATED_UPPER_P)
     u_a = from_u("s_Bs", 0.0, value / math.sqrt(2.0 * nu_b) if math.isfinite(nu_b) else 0.0,
                  dof=nu_b, source="sampling of B_s: effective ν of the records' correlated "
                                   "block means (variogram: white, flicker, random walk; "
@@ -763,7 +763,7 @@ def bias_stability(ctx: Context) -> Item:
     return Item("bias_stability", title, clause, unit, value, uncertainty=u,
                 details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk,
                          "nu_records": nu_b,
-                         "nu_records_estimate": rg.bias_stability_dof(samples, P),
+                         "nu_records_estimate": nu_est,
                          "reading_eq19_dph": float(bs.mean()),
                          "spread_of_records_dph": float(bs.std(ddof=1)) if bs.size > 1
                          else None})
