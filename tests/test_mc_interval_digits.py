@@ -25,6 +25,23 @@ def test_numerical_decimals_is_the_last_place_with_two_s_within_half_a_digit(s):
     assert 0.5 * 10.0 ** -(dec + 1) < 2 * s                     # one place right: not
 
 
+def test_numerical_decimals_agrees_with_the_decimal_logarithm():
+    """The exponent rule against ⌈log₁₀(4u)⌉ by ``Decimal.log10`` (60 digits: exact for a
+    power of ten, and 17-digit reprs lie at least 10⁻¹⁸ from one), over random u of every
+    magnitude, the powers of ten and their neighbours a float apart."""
+    from decimal import ROUND_CEILING, localcontext
+
+    rng = np.random.default_rng(20261204)
+    us = [float(u) for u in 10.0 ** rng.uniform(-300, 300, 300)] + [10.0 ** e / 4 for e in range(-30, 31)]
+    us += [math.nextafter(u, math.inf) for u in us[-61:]] + [math.nextafter(u, 0) for u in us[-61:]]
+    for u in us:
+        with localcontext(prec=60, Emax=999_999, Emin=-999_999):
+            ref = -int(Decimal(repr(4.0 * u)).log10().to_integral_value(rounding=ROUND_CEILING))
+        assert numerical_decimals(u) == ref, u
+    with pytest.raises(ValueError):
+        numerical_decimals(0.0)
+
+
 def test_quantile_numerical_u_matches_the_spread_of_quantiles_and_the_closed_form():
     rng = np.random.default_rng(20261202)
     m, probs = 400, np.array([0.025, 0.975])

@@ -753,12 +753,18 @@ def numerical_decimals(numerical_u: float) -> int:
 
     >>> numerical_decimals(0.002), numerical_decimals(0.0025), numerical_decimals(0.00024)
     (2, 2, 3)
-    >>> numerical_decimals(3.0)
-    -2
+    >>> numerical_decimals(3.0), numerical_decimals(2.5e-300)
+    (-2, 299)
+
+    Exact without a logarithm: ⌈log₁₀ x⌉ of x = 4·``numerical_u`` (its shortest repr, ≤ 17
+    digits) is the exponent of its leading digit, plus one unless x is a power of ten (a
+    1400-digit ``Decimal.log10`` gave the same integer at about 60 ms a call).
     """
-    with _wide():
-        return -int((Decimal(repr(4.0 * float(numerical_u)))).log10().to_integral_value(
-            rounding=ROUND_CEILING))
+    x = Decimal(repr(4.0 * float(numerical_u)))
+    if not (x.is_finite() and x > 0):
+        raise ValueError(f"numerical_decimals needs a positive finite u, got {numerical_u!r}")
+    lead = x.adjusted()
+    return -(lead if x.scaleb(-lead) == 1 else lead + 1)
 
 
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
