@@ -115,11 +115,17 @@ def test_effective_dof_matches_the_exact_covariance(study_records):
 
 
 def test_stated_limit_covers_95_percent(study_records):
+    """The χ² limit with the ν the item states (the correlated coefficients at their upper
+    limits, ``items.BIAS_STABILITY_CORRELATED_UPPER_P``) on the study's 400 sets: its
+    Clopper–Pearson interval holds 95 % (388/400 when written) and the z on its own
+    u = B_s/√(2ν) spreads within 0.7–1.3 (0.83)."""
+    from gonio.specs.jjf1535.items import BIAS_STABILITY_CORRELATED_UPPER_P
+
     sets, sigma, _ = study_records
     hits, z = 0, []
     for s in sets:
         bs = math.sqrt(np.mean([rg.block_mean_stability(x, 1.0, 10) ** 2 for x in s]))
-        nu = rg.bias_stability_dof(s, 10)
+        nu = rg.bias_stability_dof(s, 10, BIAS_STABILITY_CORRELATED_UPPER_P)
         hits += sigma <= bs * math.sqrt(nu / chi2.ppf(0.05, nu))
         z.append((bs - sigma) / (bs / math.sqrt(2 * nu)))
     ci = binomtest(hits, len(sets)).proportion_ci(method="exact")
