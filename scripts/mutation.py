@@ -57,7 +57,9 @@ TARGETS: dict[str, list[tuple[str, list[str]]]] = {
                      ("gonio.specs._rate_family.formulas", [
                          "least_squares_line", "block_mean_stability",
                          "earth_rate_projection_dps", "minus3db_frequency",
-                         "_log_crossing", "bias_drift_u"]),
+                         "_log_crossing", "bias_drift_u", "block_mean_variogram",
+                         "block_variogram_fit", "block_variogram_model", "block_std_dof",
+                         "bias_stability_dofs", "bias_stability_dof"]),
                      ("gonio.analysis.conformity", ["*"])],
     "iec62047-20": [("gonio.specs.iec62047_20.items", ["*"]),
                     ("gonio.specs.iec62047_20.formulas", [
