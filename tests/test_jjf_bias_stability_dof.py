@@ -195,3 +195,24 @@ def test_stated_nu_reaches_95_percent_with_ten_times_the_bias_instability():
     ci = _sets_coverage(cov, 2000, 5)
     assert ci["estimate"].high < 0.95, ci["estimate"]
     assert ci["stated"].high >= 0.95, ci["stated"]
+
+
+def test_nu_does_not_depend_on_the_output_level():
+    """The variogram of block means is that of the records less any constant; the FFT's
+    rounding must not make ν depend on the output's offset (a gyro read in counts with a
+    large zero level). Before the records were centred, a level of 10⁸ moved the stated ν
+    from 126 to 49. A constant record (all block means equal) has no spread to fit: every
+    coefficient 0, ν infinite."""
+    rng = np.random.default_rng(1)
+    x = [rng.normal(size=600) for _ in range(3)]
+    ref = rg.bias_stability_dofs(x, 10, 0.95)
+    for level in (1e6, 1e8, -3e9):
+        assert rg.bias_stability_dofs([r + level for r in x], 10, 0.95) == \
+            pytest.approx(ref, rel=1e-6)           # the samples themselves round at 3e9
+        d0, m0 = rg.block_mean_variogram([r[:60] for r in x])
+        d1, m1 = rg.block_mean_variogram([r[:60] + level for r in x])
+        assert np.allclose(d1, d0, rtol=1e-6, atol=1e-12) and (m1 == m0).all()
+    coef, cov = rg.block_variogram_fit(np.zeros(6), 6 - np.arange(6))
+    assert coef.tolist() == [0.0, 0.0, 0.0] and cov.shape == (3, 3) and not cov.any()
+    flat = [np.full(600, 2.5e7) for _ in range(3)]
+    assert rg.bias_stability_dofs(flat, 10, 0.95) == (math.inf, math.inf)

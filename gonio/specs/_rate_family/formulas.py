@@ -128,7 +128,10 @@ def block_mean_variogram(records) -> tuple[np.ndarray, np.ndarray]:
     (ȳ_(i+k) − ȳ_i)² over every pair k blocks apart in every record (k = 0 … n_max − 1,
     D̂(0) = 0), and the number of pairs behind each lag. It needs no mean, so a drift (a
     rate random walk) does not bias it (Cressie, Statistics for Spatial Data, 2.4.1). The
-    lag products come from an FFT (O(n log n) per record).
+    lag products come from an FFT (O(n log n) per record), of each record less its mean (the
+    variogram does not change; the FFT's rounding, about 10⁻¹⁶·n times the values' square,
+    would otherwise scale with the output's level: a record at 10⁸ with block means of
+    σ ≈ 0.3 moved the stated ν of :func:`bias_stability_dofs` from 126 to 49).
 
     >>> d, m = block_mean_variogram([[0.0, 1.0, 0.0, 1.0]])
     >>> d.tolist(), m.tolist()
@@ -139,6 +142,7 @@ def block_mean_variogram(records) -> tuple[np.ndarray, np.ndarray]:
     num, pairs = np.zeros(n_max), np.zeros(n_max, dtype=int)
     for x in xs:
         n = x.size
+        x = x - x.mean() if n else x
         f = np.fft.rfft(x, 2 * n)
         cross = np.fft.irfft(f * np.conj(f), 2 * n)[:n]       # Σ_i x_i x_(i+k)
         c2 = np.concatenate([[0.0], np.cumsum(x * x)])
