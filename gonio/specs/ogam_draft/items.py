@@ -772,6 +772,38 @@ def consistency_missing_conditions(values, conditions, fmt, clause: str) -> str 
             "condition)")
 
 
+def consistency_order(groups, conditions=None) -> list[int]:
+    """The order 7.6 and 7.7 take their conditions in — the rows of the item's table, and
+    the order in which its Monte Carlo lines draw for them: the programme's order
+    (``conditions``, the protocol's rates or orientations), a condition it does not list
+    after those in ascending order (rates) or by name (orientations), and the reference
+    read from 7.4's rows last. ``groups``: (condition value, source test) in the order
+    the file first holds them; the file's row order never enters (the same readings in
+    another order gave C_v 0.364 and 0.324 ppm: the draws fell to other conditions).
+    Returns the indices of ``groups`` in that order.
+
+    >>> consistency_order([(100.0, "rate_consistency"), (1.0, "rate_consistency"),
+    ...                    (60.0, "angle_deviation"), (10.0, "rate_consistency")],
+    ...                   (1.0, 10.0, 60.0, 100.0))
+    [1, 3, 0, 2]
+    >>> consistency_order([("east", "pointing_consistency"), ("north", "pointing_consistency")])
+    [0, 1]
+    """
+    def rank(v) -> float:
+        for j, c in enumerate(conditions or ()):
+            if (v == c if isinstance(v, str) or isinstance(c, str)
+                    else math.isclose(float(v), float(c), rel_tol=1e-9, abs_tol=0.0)):
+                return float(j)
+        return math.inf
+
+    def key(i):
+        v, src = groups[i]
+        return (src == "angle_deviation", rank(v), isinstance(v, str),
+                v if isinstance(v, str) else "", 0.0 if isinstance(v, str) else float(v))
+
+    return sorted(range(len(groups)), key=key)
+
+
 def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_value,
                  fmt, scale, conditions=None):
     """E per condition (7.6 rates, 7.7 orientations), spread and ratio."""
@@ -807,6 +839,8 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
             return Characteristic(name=name, reason=reason, unused=unused)
         groups.append((ref_value, "angle_deviation", ref_rows))
         is_ref.append(True)
+    order = consistency_order([(v, src) for v, src, _ in groups], conditions)
+    groups, is_ref = [groups[i] for i in order], [is_ref[i] for i in order]
     reason = consistency_missing_conditions([v for v, _, _ in groups], conditions, fmt,
                                             _CLAUSES[name])
     if reason is not None:
