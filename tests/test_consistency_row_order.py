@@ -72,7 +72,7 @@ def test_consistency_does_not_depend_on_the_row_order(pair, item, col):
         assert ub["interval"] == pytest.approx(ua["interval"], rel=1e-9, abs=1e-15)
 
 
-def test_the_shuffle_moved_the_conditions(pair):
+def test_the_reordered_file_holds_the_rates_in_another_order(pair):
     """The test's premise: the reordered file holds the rates in another order."""
     assert sorted(pair["first-a"]) == sorted(pair["first-b"])
     assert pair["first-a"] != pair["first-b"]

@@ -756,13 +756,7 @@ def consistency_missing_conditions(values, conditions, fmt, clause: str) -> str 
     """
     if conditions is None:
         return None
-
-    def same(a, b):
-        if isinstance(a, str) or isinstance(b, str):
-            return a == b
-        return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=0.0)
-
-    missing = [c for c in conditions if not any(same(c, v) for v in values)]
+    missing = [c for c in conditions if not any(_same_condition(c, v) for v in values)]
     if not missing:
         return None
     n = len(conditions)
@@ -790,18 +784,19 @@ def consistency_order(groups, conditions=None) -> list[int]:
     [0, 1]
     """
     def rank(v) -> float:
-        for j, c in enumerate(conditions or ()):
-            if (v == c if isinstance(v, str) or isinstance(c, str)
-                    else math.isclose(float(v), float(c), rel_tol=1e-9, abs_tol=0.0)):
-                return float(j)
-        return math.inf
+        return next((float(j) for j, c in enumerate(conditions or ())
+                     if _same_condition(c, v)), math.inf)
 
-    def key(i):
-        v, src = groups[i]
-        return (src == "angle_deviation", rank(v), isinstance(v, str),
-                v if isinstance(v, str) else "", 0.0 if isinstance(v, str) else float(v))
+    # one item's conditions are all rates or all orientations: v orders them among themselves
+    return sorted(range(len(groups)), key=lambda i: (groups[i][1] == "angle_deviation",
+                                                      rank(groups[i][0]), groups[i][0]))
 
-    return sorted(range(len(groups)), key=key)
+
+def _same_condition(a, b) -> bool:
+    """Two 7.6/7.7 conditions are the same: orientations by name, rates to 10⁻⁹."""
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=0.0)
 
 
 def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_value,
