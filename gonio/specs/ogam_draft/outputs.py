@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.atomic import output_dir, output_set, write_text
+from gonio.kit.render import display
 from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
@@ -90,10 +91,13 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
         tc = kd["tilt_correction"]
         lines.append(f"scale_factor (the draft's 7.1 mean, uncorrected, not stated): "
                      f"{kd['estimates']['draft']['value']:.10g} counts/deg")
-        lines.append(f"note: the stated K is corrected "      # the estimate's line has no U
-                     f"by the measured tilt psi = {tc['tilt_deg']:.2g} deg (U95 "
-                     f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
-                     f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")
+        # the estimate's line has no U; ψ, α and their U95 by the certificate's rules
+        # (stated.k_tilt_note)
+        lines.append(f"note: the stated K is corrected "
+                     f"by the measured tilt psi = {display('sig2', tc['tilt_deg'])} deg (U95 "
+                     f"{display('sig2', tc['U95_tilt_deg'])} deg) at azimuth "
+                     f"{display('sig3', tc['azimuth_deg'])} deg (U95 "
+                     f"{display('sig2', tc['U95_azimuth_deg'])} deg), beyond the draft")
     tk = kd.get("table_calibration")
     e_table = ((d["items"].get("angle_deviation") or {}).get("details") or {}).get(
         "table_calibration")
