@@ -8,9 +8,10 @@ acquisition interrupted in the middle of the rests continues at the next positio
 The served bench and ``gonio simulate`` share the bench's physics and seeding but not the
 timing (a served session's instants are the host's), so the two files agree within the
 noise, not bit for bit, and a served file differs from run to run: the comparisons are
-Student-t intervals of 99.9 % (ν = N − 3 = 9, k = 4.78), so that a correct acquisition fails
-them about once in a thousand comparisons, while a rest at a wrong position or a wrong sign
-of the table angle moves α by tens of degrees (u(α) ≈ 2°). The bench is the ``rlg`` bench
+Student-t intervals of 99.9 % (the rests taken in opposite pairs: ν = N/2 − 2 = 4, k =
+8.61), so that a correct acquisition fails them about once in a thousand comparisons, while
+a rest at a wrong position or a wrong sign of the table angle moves α by tens of degrees
+(u(α) ≈ 2°). The bench is the ``rlg`` bench
 with its tilt at the draft's Annex A.1 bound, 0.1°, at azimuth 120°."""
 
 from __future__ import annotations
@@ -42,8 +43,8 @@ LATITUDE_DEG = 40.2
 META = {"latitude_deg": str(LATITUDE_DEG)}
 N_TOTAL = 3 + 12 + 3   # 7.3's readings, the 12 rests, 7.1's rounds
 TILT_DEG, AZIMUTH_DEG = 0.1, 120.0
-#: Student-t factor of the tests' 99.9 % intervals, ν = 12 − 3.
-K999 = float(student_t.ppf(0.9995, 9))
+#: Student-t factor of the tests' 99.9 % intervals, ν = 12/2 − 2 (six opposite pairs).
+K999 = float(student_t.ppf(0.9995, 4))
 #: The Earth's rotation rate, ″/s (WGS 84: 7.292115×10⁻⁵ rad/s).
 EARTH_ARCSEC_S = 7.292115e-5 * 180.0 / math.pi * 3600.0
 
@@ -104,7 +105,7 @@ def _assert_tilt_agrees(acq: Path, sim: Path, bench) -> None:
         assert abs(e.tilt_deg - inst.tilt_deg) <= k * e.u_tilt_deg, e
         d = (e.tilt_azimuth_table_deg - inst.tilt_azimuth_deg + 180.0) % 360.0 - 180.0
         assert abs(d) <= k * e.u_phase_deg, e
-        assert e.n_positions == 12 and e.dof == 9
+        assert e.n_positions == 12 and e.dof == 4 and e.basis == "opposite pairs"
         assert abs(e.offset_arcsec_s - vertical) <= bias + k * e.residual_sd_arcsec_s, e
 
 
@@ -129,16 +130,19 @@ def test_plan_takes_the_rests_after_zero_stability_uncompensated():
                                             "scale_factor up 60 dps series 1"]
     te = blocks[1]
     assert te.positions and not te.at_rest and te.rezero
-    assert [st.stop_deg for st in te.steps] == [30.0 * i for i in range(12)]
+    # opposite pairs: 0°, 180°, 30°, 210°, …, 150°, 330°
+    order = [30.0 * (i // 2) + 180.0 * (i % 2) for i in range(12)]
+    assert [st.stop_deg for st in te.steps] == order
     assert {(st.test, st.series, st.rate_dps, st.read_delay_s, st.rest_s) for st in te.steps} \
         == {("tilt_estimate", 1, 60.0, 120.0, 5.0)}
-    # each rest: the 30° move at 60 °/s (none for the first), the settling, the dwell; no
-    # static phase (the Earth rate is the signal)
+    # each rest: the move at 60 °/s from the one before (180° into a pair, 150° back to the
+    # next pair; none for the first), the settling, the dwell; no static phase (the Earth
+    # rate is the signal)
     accel = 200.0
     per = programme_duration_s(blocks, proto, accel)[3:15]
-    move = trapezoid_duration_s(30.0, 60.0, accel)
-    assert move == pytest.approx(30.0 / 60.0 + 60.0 / accel)      # trapezoid: d/v + v/a
-    assert per == pytest.approx([125.0] + [move + 125.0] * 11)
+    move = [trapezoid_duration_s(d, 60.0, accel) for d in (180.0, -150.0)]
+    assert move == pytest.approx([d / 60.0 + 60.0 / accel for d in (180.0, 150.0)])  # d/v + v/a
+    assert per == pytest.approx([125.0] + [move[i % 2 == 0] + 125.0 for i in range(1, 12)])
 
 
 # ------------------------------------------------------------------ against the simulation
@@ -213,7 +217,7 @@ def test_resume_in_the_middle_of_the_rests(rlg, simulated, calibrate, tmp_path):
     # on a terminal: the rest under way, then the point count (7.3 and 4 rests kept: the
     # resume's first reading is point 8 of 18)
     shown = term.getvalue()
-    assert "acquire: tilt estimate rest 5/12 at 120°, 2 min 00 s dwell" in shown, shown
+    assert "acquire: tilt estimate rest 5/12 at 60°, 2 min 00 s dwell" in shown, shown
     assert "rest 4/12" not in shown
     assert f"acquire: point 8/{N_TOTAL}  tilt_estimate series 1 round 5  about" in shown, shown
     after = (out / "readings.csv").read_text(encoding="utf-8")

@@ -107,23 +107,23 @@ def bound_line_u(res: dict) -> float:
 def test_tilt_beyond_stated_bound_is_a_finding(sim, tmp_path):
     k = 76434.84
     psi = psi_numpy(sim, k)
-    assert 0.03 < psi < 0.05                      # the bench's mounting: ~0.041°
+    assert 0.04 < psi < 0.055                     # the bench's mounting 0.05° (estimate 0.048°)
     low = edited(sim, tmp_path / "low", header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.02\n"))
     near = edited(sim, tmp_path / "near",
-                  header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.04\n"))
+                  header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.047\n"))
     far = edited(sim, tmp_path / "far", header=("# tilt_bound_deg:", "# tilt_bound_deg: 0.2\n"))
     r_low, r_near = calibrate(low, tmp_path / "ol"), calibrate(near, tmp_path / "on")
     r_far = calibrate(far, tmp_path / "of")
     beyond = [f for f in r_low["findings"] if f["code"] == "tilt-beyond-bound"]
     assert len(beyond) == 1 and beyond[0]["action"] == "flagged" and beyond[0]["clause"] == "A.1"
     assert "0.02°" in beyond[0]["message"]
-    # 0.04° lies inside ψ's interval: the bound is not contradicted (no finding), but it no
+    # 0.047° lies inside ψ's interval: the bound is not contradicted (no finding), but it no
     # longer bounds what was measured: its lines are taken at ψ + U95 as well, and noted
     assert not [f for f in r_near["findings"] if f["code"] == "tilt-beyond-bound"]
     tm = tilt_measured(r_low)
     top = tm["tilt_deg"] + tm["U95_tilt_deg"]
     assert tm["tilt_deg"] - tm["U95_tilt_deg"] > 0.02
-    assert tm["tilt_deg"] - tm["U95_tilt_deg"] <= 0.04 < top
+    assert tm["tilt_deg"] - tm["U95_tilt_deg"] <= 0.047 < top
     assert bound_line_u(r_near) == pytest.approx(bound_line_u(r_low), rel=1e-9)
     assert f"upper 95 % limit psi + U95 = {top:.3g} deg" in json.dumps(r_near)
     # 0.2° bounds the whole interval: the line stays at the stated bound (the coupling is

@@ -47,12 +47,14 @@ def test_noise_free_bench_recovers_tilt_and_azimuth(orientation, lat):
         assert e.tilt_deg == pytest.approx(psi, rel=1e-6)
         d = (e.tilt_azimuth_table_deg - alpha + 180.0) % 360.0 - 180.0
         assert abs(d) < 1e-4
-        assert e.n_positions == 8 and e.dof == 5
+        # taken in opposite pairs (0°, 180°, 45°, …): ν = 8/2 − 2 (fit_first_harmonic)
+        assert e.n_positions == 8 and e.dof == 2 and e.basis == "opposite pairs"
 
 
 def test_coverage_over_seeds():
     """u(ψ) is right to better than 20 %: over 200 seeds the z-scores (ψ̂ − ψ)/u follow
-    Student's t with ν = 21 (std √(ν/(ν − 2)) = 1.051), and ±2u covers 94 %.
+    Student's t with ν = 10 (24 rests in 12 opposite pairs: ν = 12 − 2; std √(ν/(ν − 2))
+    = 1.118), and ±2u covers 92.7 %.
 
     Bounds are 3 standard errors of the statistic for n = 200 seeds: the std of z within
     ±3·s/√(2(n − 1)) = ±0.16 (so u 20 % too small, std 1.26, or 20 % too large, 0.88,
@@ -63,7 +65,7 @@ def test_coverage_over_seeds():
     b = replace(bench(psi, alpha, lat, arw_dpsh=0.001, quantisation=True, bias_dph=0.01),
                 sample_rate_hz=20.0)
     p = proto(24, 20.0)
-    n, nu = 200, 21
+    n, nu = 200, 10
     z, zp = [], []
     for seed in range(n):
         e = tilt_estimate_from_readings(run_session(p, b, seed=seed).readings, K_NOM, lat)
@@ -75,9 +77,65 @@ def test_coverage_over_seeds():
     tol = 3 * s_t / math.sqrt(2 * (n - 1))
     for zz in (np.array(z), np.array(zp)):
         assert abs(np.std(zz, ddof=1) - s_t) < tol
-        p_cover = 2 * stats.t.cdf(2.0, nu) - 1            # 0.941
+        p_cover = 2 * stats.t.cdf(2.0, nu) - 1            # 0.927
         hits = int(np.sum(np.abs(zz) <= 2.0))
         assert abs(hits - n * p_cover) <= 3 * math.sqrt(n * p_cover * (1 - p_cover))
+
+
+@pytest.mark.parametrize("order", ["pairs", "theta"])
+def test_coverage_under_a_correlated_bias(order, monkeypatch):
+    """A bias that wanders over several rests (Gauss–Markov instability 0.006 °/h, τ = 300 s,
+    rests ~35 s apart, a little white noise): taken in opposite pairs (the programme's
+    order), the 95 % intervals of ψ and α (k95 with the pairs' ν = 4) hold the truth in 95 %
+    of 1000 draws, neither fewer nor more than binomial scatter allows (3σ: ±2.1 %). Taken
+    in order of θ, as the rests used to be, the same bench's residual-based intervals (ν = 9)
+    held it in about 55 % (test below, the order patched back): the wander lands in the
+    first harmonic and the residuals do not see it, so there the estimate says so by its
+    basis and is not trusted to cover."""
+    from dataclasses import replace
+    psi, alpha, lat = 0.15, 40.0, 40.0
+    b = replace(bench(psi, alpha, lat, arw_dpsh=0.0001, bias_instability_dph=0.006,
+                      bias_instability_tau_s=300.0, quantisation=True, bias_dph=0.01),
+                sample_rate_hz=20.0)
+    if order == "theta":
+        monkeypatch.setattr(TiltEstimatePlan, "order_deg",
+                            property(lambda self: [360.0 * i / self.positions
+                                                   for i in range(self.positions)]))
+    p = proto(12, 30.0)
+    n = 1000
+    hits = np.zeros(2)
+    for seed in range(n):
+        e = tilt_estimate_from_readings(run_session(p, b, seed=seed).readings, K_NOM, lat)
+        d = (e.tilt_azimuth_table_deg - alpha + 180.0) % 360.0 - 180.0
+        hits += [abs(e.tilt_deg - psi) <= e.k95 * e.u_tilt_deg, abs(d) <= e.k95 * e.u_phase_deg]
+    if order == "theta":
+        assert e.basis == "residuals" and e.dof == 9
+        assert np.all(hits / n < 0.8)                  # what the pairs are for
+        return
+    assert e.basis == "opposite pairs" and e.dof == 4
+    band = 3 * math.sqrt(0.95 * 0.05 / n)
+    assert np.all(np.abs(hits / n - 0.95) <= band), hits / n
+
+
+def test_pairs_cancel_a_drift_the_residuals_do_not():
+    """A bias drifting linearly in time (no other noise) on rests taken in opposite pairs:
+    each pair's difference holds the drift over one dwell only, so (a, b) move by far less
+    than they do with the rests in order of θ, where the drift is a sawtooth in θ whose
+    first harmonic is the whole drift over 1/π (closed form: Σ k cos(2πk/N) = −N/2)."""
+    th_pairs = TiltEstimatePlan(positions=12).order_deg
+    th_seq = [30.0 * i for i in range(12)]
+    slope = 1e-3                                        # ″/s per rest
+    drift = slope * np.arange(12)
+    f_p = fit_first_harmonic(th_pairs, 9.7 + drift)
+    f_s = fit_first_harmonic(th_seq, 9.7 + drift)
+    # in order of θ: a = (2/N) Σ k·slope·cos θ_k = −slope, b = (2/N) Σ k·slope·sin θ_k
+    assert f_s.coef[1] == pytest.approx(-slope, rel=1e-9)
+    assert f_s.coef[2] == pytest.approx(-slope / math.tan(math.pi / 12), rel=1e-9)
+    # in pairs: Σ_k k cos θ_k = −Σ_m cos θ_m over the pairs' first positions (θ_m = 30° m)
+    first = np.radians(np.arange(6) * 30.0)
+    assert f_p.coef[1] == pytest.approx(-slope * np.cos(first).sum() / 6, rel=1e-9)
+    assert f_p.coef[2] == pytest.approx(-slope * np.sin(first).sum() / 6, rel=1e-9)
+    assert math.hypot(*f_p.coef[1:]) < 0.2 * math.hypot(*f_s.coef[1:])
 
 
 def test_ls_covariance_against_curve_fit():

@@ -137,14 +137,15 @@ def plan_programme(protocol: Protocol) -> list[Block]:
 
 def tilt_estimate_block(plan) -> Block:
     """The ``[tilt_estimate]`` rests (:class:`~gonio.specs.ogam_draft.protocol.TiltEstimatePlan`)
-    as the virtual bench takes them: position i (1…N) at 360°·(i−1)/N, reached from the one
-    before at ``rate_dps``; after ``settle_s`` a zeroing and, ``dwell_s`` later, a reading of
-    the counts (test ``tilt_estimate``, series 1, round i, ``rate_dps`` the section's)."""
+    as the virtual bench takes them: rest i (1…N) at the plan's i-th position
+    (``plan.order_deg``: opposite pairs), reached from the one before at ``rate_dps``; after
+    ``settle_s`` a zeroing and, ``dwell_s`` later, a reading of the counts (test
+    ``tilt_estimate``, series 1, round i, ``rate_dps`` the section's)."""
     steps = []
-    for i in range(plan.positions):
-        x = 360.0 * i / plan.positions
+    order = plan.order_deg
+    for i, x in enumerate(order):
         steps.append(Step("tilt_estimate", 1, i + 1, plan.rate_dps, plan.orientation,
-                          start_deg=360.0 * (i - 1) / plan.positions if i else 0.0, stop_deg=x,
+                          start_deg=order[i - 1] if i else 0.0, stop_deg=x,
                           read_delay_s=plan.dwell_s, rest_s=plan.settle_s))
     return Block(f"tilt_estimate {plan.orientation}", plan.orientation, steps,
                  return_to_zero=False, positions=True)

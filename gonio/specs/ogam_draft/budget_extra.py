@@ -305,7 +305,7 @@ class TiltCorrection:
 
     delta_rel: float            # δ: K(7.1) = K·(1 + δ)
     u_delta_rel: float          # u(δ), from the fit's covariance (ν = dof)
-    dof: int                    # N − 3 of the tilt estimate's fit
+    dof: int                    # ν of the tilt estimate's fit (N/2 − 2 in pairs, else N − 3)
     tilt_deg: float             # ψ
     u_tilt_deg: float
     azimuth_deg: float          # α, the tilt's azimuth in the table frame
@@ -314,6 +314,7 @@ class TiltCorrection:
     k95: float                  # Student-t factor for 95 % with ν = dof
     n_positions: int
     orientation: str            # the tilt estimate's table axis
+    basis: str = "residuals"    # how the fit's u was found (tilt_estimate.fit_first_harmonic)
 
     def to_dict(self) -> dict:
         """Plain dict (results.json); the 95 % expanded uncertainties of ψ and α beside u."""
@@ -338,7 +339,7 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
     δ's gradient (cos ψ·D, sin ψ·D′) give u²(δ) by the law of propagation with the
     correlation of ψ and α (JCGM 100 5.2). With the estimate taken in 7.1's orientation δ is
     linear in (a, b) (sin ψ cos γ = a/Ω_⊥, sin ψ sin γ = −b/Ω_⊥), so the first-order u is
-    exact; ν = N − 3 (the fit's).
+    exact; ν the fit's (N/2 − 2 for rests in opposite pairs, else N − 3).
 
     Examples
     --------
@@ -393,7 +394,7 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
         dof=int(fit.dof), tilt_deg=float(estimate.tilt_deg), u_tilt_deg=math.degrees(u_psi),
         azimuth_deg=float(estimate.tilt_azimuth_table_deg), u_azimuth_deg=math.degrees(u_al),
         r_tilt_azimuth=r, k95=float(estimate.k95), n_positions=int(estimate.n_positions),
-        orientation=str(estimate.orientation))
+        orientation=str(estimate.orientation), basis=fit.basis)
 
 
 @dataclass(frozen=True)

@@ -2661,11 +2661,16 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
             res = dataclasses.replace(res, **{name: with_corrected_tables(getattr(res, name),
                                                                           c2)})
     if proto.tilt_estimate is not None and "scale_factor" in items:
+        from gonio.specs.ogam_draft.tilt_estimate import BASIS_PAIRS
         tc = items["scale_factor"].correction
         notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
             f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
             f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
-            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"))
+            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"
+            + ("" if tc.basis == BASIS_PAIRS else
+               "; the rests were not taken in opposite pairs: u(psi) and u(azimuth) are the "
+               "fit residuals', which assume the rests' errors uncorrelated (a bias that "
+               "wanders over several rests makes them too small)")))
     if "scale_factor" in items and res.scale_factor.measured:
         p_note = _scale_factor_positions(res.scale_factor.table, proto)[2]
         if p_note:

@@ -545,8 +545,9 @@ register_section("equal_division", EDA_PROTOCOL_SCHEMA, _eda_factory)
 class TiltEstimatePlan:
     """The static multi-position test: N equally spaced rests of ``dwell_s`` each.
 
-    Readings (one per position, test ``tilt_estimate``): ``round`` = position index
-    (1…N), ``table_deg`` = position (360°·(i−1)/N), ``time_s`` = dwell time,
+    Readings (one per position, test ``tilt_estimate``): ``round`` = the rest's place in
+    the order taken (1…N, :attr:`order_deg`), ``table_deg`` = its position (a multiple of
+    360°/N), ``time_s`` = dwell time,
     ``gyro_counts`` = pulses accumulated over the dwell, *not* Earth-rate
     compensated (the Earth rate is the signal).
     """
@@ -557,6 +558,26 @@ class TiltEstimatePlan:
     settle_s: float = 5.0
     orientation: str = "up"
     rate_dps: float = 60.0
+
+    @property
+    def order_deg(self) -> list[float]:
+        """The positions in the order the rests are taken (round 1, 2, …): with N even, in
+        opposite pairs, each position followed by the one 180° from it — 0°, 180°, 30°,
+        210°, … for N = 12 — so that the difference within a pair, two rests one dwell
+        apart, carries the first harmonic twice and the bias's slow wander (its drift, its
+        Gauss–Markov instability) hardly at all; with N odd, in order of θ. The pairs are
+        what gives the estimate an honest uncertainty under a correlated bias
+        (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`).
+
+        >>> TiltEstimatePlan(positions=8).order_deg
+        [0.0, 180.0, 45.0, 225.0, 90.0, 270.0, 135.0, 315.0]
+        >>> TiltEstimatePlan(positions=5).order_deg
+        [0.0, 72.0, 144.0, 216.0, 288.0]
+        """
+        n = self.positions
+        if n % 2:
+            return [360.0 * i / n for i in range(n)]
+        return [360.0 * (i // 2 + (i % 2) * n // 2) / n for i in range(n)]
 
 
 SECTION_SCHEMA = {

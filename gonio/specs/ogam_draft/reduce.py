@@ -234,16 +234,16 @@ def _tilt_estimate(ctx: _Ctx) -> None:
     As the bench takes it (gonio.specs.ogam_draft.bench.session ``tilt_estimate``): at each position the
     zeroing sample ``settle_s`` after arrival, the reading ``dwell_s`` later; the counts are
     not Earth-rate compensated (the Earth rate is the signal); ``table_deg`` is the nominal
-    position 360°·(i−1)/N. The first position is the first rest long enough from the cursor;
-    the others are looked for at its level + 360°·(i−1)/N (modulo a turn), in order.
+    position, the plan's i-th (``plan.order_deg``: opposite pairs). The first position is
+    the first rest long enough from the cursor; the others are looked for at its level +
+    their position (modulo a turn), in order.
     """
     plan = ctx.proto.tilt_estimate
     need = plan.settle_s + plan.dwell_s
     ref = None
     q = ctx.cursor
     found = 0
-    for i in range(plan.positions):
-        x = 360.0 * i / plan.positions
+    for i, x in enumerate(plan.order_deg):
         while q < len(ctx.rests):
             r = ctx.rests[q]
             long_enough = r.t_end_s + ctx.eps >= r.t_arrive_s + need
@@ -395,9 +395,8 @@ def _plan_keys(proto: Protocol) -> dict:
                 (math.nan, proto.zero_stability.orientation)
     te = proto.tilt_estimate
     if te is not None:
-        for i in range(te.positions):
-            plan[("tilt_estimate", 1, i + 1, te.rate_dps, te.orientation)] = \
-                (360.0 * i / te.positions, te.orientation)
+        for i, x in enumerate(te.order_deg):
+            plan[("tilt_estimate", 1, i + 1, te.rate_dps, te.orientation)] = (x, te.orientation)
     for item in proto.items():
         for series in range(1, item.series + 1):
             x0 = item.rounds[0].start_deg

@@ -1514,8 +1514,10 @@ def tilt_estimate_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> li
 
     A rest at θ accumulates, over its dwell ``time_s``, the bias, the Earth rate along the
     table axis and the tilt's first harmonic Ω_⊥ sin ψ cos(θ + α − β)
-    (:mod:`gonio.specs.ogam_draft.tilt_estimate`), plus a bias drift over the test (the
-    positions are read in order of θ: a line in θ). So d_j = the reading's indicated angle
+    (:mod:`gonio.specs.ogam_draft.tilt_estimate`), plus a bias drift over the test (a line
+    in θ where the positions are read in order of θ; taken in opposite pairs, as the
+    programme takes them, the drift is a line within each half-turn, which the fit does not
+    follow and the drift floor below allows for). So d_j = the reading's indicated angle
     (``gyro_deg``, else ``gyro_counts`` / K_ref), ″, scaled to the median dwell
     (d_j · median(time_s) / time_j), is judged against the least-squares fit of the others
     in θ (the line with cos θ, sin θ where ``HARMONIC_MIN`` others allow: the protocol's

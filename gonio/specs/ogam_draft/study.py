@@ -682,7 +682,7 @@ def table_positions_deg(protocol: Protocol) -> np.ndarray:
             pos += [r.stop_deg, r.start_deg if item.rezero else x0]
     te = protocol.tilt_estimate
     if te is not None:
-        pos += [360.0 * i / te.positions for i in range(te.positions)]
+        pos += list(te.order_deg)
     w = np.mod(np.round(np.asarray(pos, dtype=float), 9), 360.0)
     return np.unique(w)
 

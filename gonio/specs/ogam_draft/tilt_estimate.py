@@ -53,30 +53,77 @@ from gonio.units import ARCSEC_PER_DEG
 
 
 
+#: How a fit's uncertainty was found (:func:`fit_first_harmonic`).
+BASIS_PAIRS = "opposite pairs"
+BASIS_RESIDUALS = "residuals"
+#: Two positions are opposite when they differ by 180° within this, degrees.
+OPPOSITE_TOL_DEG = 1e-6
+
+
 @dataclass(frozen=True)
 class HarmonicFit:
     """c0 + a cos θ + b sin θ: coefficients (input unit), covariance, residuals."""
 
     coef: np.ndarray            # (c0, a, b)
-    cov: np.ndarray             # 3×3, s² (XᵀX)⁻¹
-    residual_sd: float          # s
-    dof: int                    # N − 3
+    cov: np.ndarray             # 3×3 (see fit_first_harmonic for its basis)
+    residual_sd: float          # s, the scale the covariance of (a, b) is drawn from
+    dof: int                    # its degrees of freedom: N/2 − 2 (pairs) or N − 3
     fitted: np.ndarray
     residuals: np.ndarray
+    basis: str = BASIS_RESIDUALS
+
+
+def opposite_pairs(theta_deg) -> bool:
+    """Whether the positions, in the order the rests were taken, come in opposite pairs:
+    θ₂ = θ₁ + 180°, θ₄ = θ₃ + 180°, … (to ``OPPOSITE_TOL_DEG``), at least three pairs
+    (:attr:`gonio.specs.ogam_draft.protocol.TiltEstimatePlan.order_deg` takes them so).
+
+    >>> opposite_pairs([0, 180, 30, 210, 60, 240]), opposite_pairs(np.arange(6) * 60.0)
+    (True, False)
+    """
+    th = np.asarray(theta_deg, dtype=float)
+    if th.size < 6 or th.size % 2:
+        return False
+    d = (th[1::2] - th[0::2]) % 360.0
+    return bool(np.all(np.abs(d - 180.0) <= OPPOSITE_TOL_DEG))
 
 
 def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
-    """Least-squares fit of y = c0 + a cos θ + b sin θ with covariance s²(XᵀX)⁻¹.
+    """Least-squares fit of y = c0 + a cos θ + b sin θ and the covariance of (a, b), the
+    positions ``theta_deg`` and the rates ``y`` in the order the rests were taken.
 
-    s² = RSS/(N − 3) (JCGM 100 H.3 for the straight-line analogue). Needs N ≥ 4
-    distinct positions (N = 3 leaves no degree of freedom for s).
+    The coefficients are the least-squares ones. Their uncertainty is the one documented
+    choice of this estimate (the draft has no such test):
+
+    * **opposite pairs** (:func:`opposite_pairs`, the order the programme takes): the
+      difference within pair m, d_m = y(θ_m) − y(θ_m + 180°) = 2(a cos θ_m + b sin θ_m)
+      + e_m, holds the first harmonic twice and, the two rests being one dwell apart, the
+      bias's slow wander (drift, Gauss–Markov instability, rate random walk) hardly at all;
+      the pair sums hold c0 and that wander. The least-squares (a, b) are those of the d_m
+      alone (the sums and differences are an orthogonal split of the data), so
+      s² = Σ r_m² / (2(M − 2)) over the M pairs' residuals r_m gives Σ_ab = s²[(XᵀX)⁻¹]_ab
+      with ν = M − 2; c0's variance is drawn from the sums' scatter (M − 1 degrees of
+      freedom), which holds the wander.
+    * **residuals** (any other order): s² = RSS/(N − 3), ν = N − 3 (JCGM 100 H.3 for the
+      straight-line analogue), which assumes the rests' errors uncorrelated. Rests taken in
+      order of θ under a bias correlated over several dwells put the wander into the first
+      harmonic while the residuals see its average: on the virtual RLG bench (Gauss–Markov
+      instability, τ = 300 s, rests 125 s apart) the 95 % intervals held the truth in 91 %
+      of 300 draws (``docs/draft-readings.md``, in-situ tilt estimate).
+
+    Needs N ≥ 4 positions spread over the circle (N = 3 leaves no degree of freedom).
 
     Examples
     --------
     >>> th = np.arange(4) * 90.0
     >>> f = fit_first_harmonic(th, [3.1, 2.0, 0.9, 2.0])   # 2 + 1.1 cos θ, plus nothing
-    >>> (f.coef.round(12) + 0.0).tolist(), f.dof, round(f.residual_sd, 12)
-    ([2.0, 1.1, 0.0], 1, 0.0)
+    >>> (f.coef.round(12) + 0.0).tolist(), f.dof, round(f.residual_sd, 12), f.basis
+    ([2.0, 1.1, 0.0], 1, 0.0, 'residuals')
+    >>> th = [0, 180, 60, 240, 120, 300]                    # three opposite pairs
+    >>> y = 2 + 1.1 * np.cos(np.radians(th)) + np.array([0.3, 0.3, 0.0, 0.0, -0.3, -0.3])
+    >>> f = fit_first_harmonic(th, y)                      # a wander the pairs cancel
+    >>> (f.coef.round(12) + 0.0).tolist(), f.dof, round(f.residual_sd, 12), f.basis
+    ([2.0, 1.1, 0.0], 1, 0.0, 'opposite pairs')
     """
     th = np.radians(np.asarray(theta_deg, dtype=float))
     y = np.asarray(y, dtype=float)
@@ -93,9 +140,20 @@ def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
     coef = np.linalg.solve(xtx, x.T @ y)
     fitted = x @ coef
     res = y - fitted
-    dof = th.size - 3
-    s2 = float(res @ res) / dof
-    return HarmonicFit(coef, s2 * np.linalg.inv(xtx), math.sqrt(s2), dof, fitted, res)
+    inv = np.linalg.inv(xtx)
+    if not opposite_pairs(np.degrees(th)):
+        dof = th.size - 3
+        s2 = float(res @ res) / dof
+        return HarmonicFit(coef, s2 * inv, math.sqrt(s2), dof, fitted, res)
+    m = th.size // 2
+    r_d = res[0::2] - res[1::2]                 # residuals of the pair differences
+    dof = m - 2
+    s2 = float(r_d @ r_d) / (2.0 * dof)
+    r_s = res[0::2] + res[1::2]                 # of the pair sums (mean zero: c0 fitted)
+    cov = s2 * inv
+    cov[0, :] = cov[:, 0] = 0.0
+    cov[0, 0] = float(r_s @ r_s) / (2.0 * (m - 1)) / th.size
+    return HarmonicFit(coef, cov, math.sqrt(s2), dof, fitted, res, BASIS_PAIRS)
 
 
 @dataclass
@@ -117,7 +175,8 @@ class TiltEstimate:
     dof: int
     k95: float                          # Student-t factor for 95 % with ν = dof
     residual_sd_arcsec_s: float
-    table: pd.DataFrame = field(repr=False, default_factory=pd.DataFrame)
+    table: pd.DataFrame = field(repr=False, default_factory=pd.DataFrame)   # in the order taken
+    basis: str = BASIS_RESIDUALS        # how u was found (fit_first_harmonic)
 
     def to_dict(self) -> dict:
         """Plain dict (for ``--json``)."""
@@ -135,7 +194,8 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
     Parameters
     ----------
     theta_deg : array
-        Table positions, degrees (N ≥ 4, best equally spaced over 360°).
+        Table positions in the order the rests were taken, degrees (N ≥ 4, best equally
+        spaced over 360° and taken in opposite pairs: :func:`fit_first_harmonic`).
     rate_arcsec_s : array
         Mean sensed rate at each position, ″/s (uncompensated: the Earth rate is the signal).
     latitude_deg, orientation : float, str
@@ -147,7 +207,8 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
     -------
     TiltEstimate
         ψ = asin(A/Ω_⊥), A = hypot(a, b); α − β = atan2(−b, a) (module docstring);
-        u by the law of propagation on the fit covariance (JCGM 100 5.1.2).
+        u by the law of propagation on the fit covariance (JCGM 100 5.1.2), ν and the
+        covariance's basis those of :func:`fit_first_harmonic`.
 
     Examples
     --------
@@ -204,7 +265,7 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
         phase_deg=math.degrees(gamma), u_phase_deg=math.degrees(u_ph),
         tilt_azimuth_table_deg=(math.degrees(gamma + beta) + 180.0) % 360.0 - 180.0,
         dof=fit.dof, k95=float(student_t.ppf(0.975, fit.dof)),
-        residual_sd_arcsec_s=fit.residual_sd, table=table)
+        residual_sd_arcsec_s=fit.residual_sd, table=table, basis=fit.basis)
 
 
 def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
@@ -220,7 +281,8 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
     Rate at each position = gyro_counts / (K · time_s) (or gyro_deg / time_s), ″/s;
     K from the argument, else the file's ``nominal_scale_factor_counts_per_deg``;
     latitude from the argument, else the file's ``latitude_deg``. Rows must share
-    one orientation and one series.
+    one orientation and one series; they are taken in the order of ``round`` (the order the
+    rests were taken, whatever the file's row order), each round once.
 
     Parameters
     ----------
@@ -246,6 +308,11 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
     rows = df[df["test"] == "tilt_estimate"]
     if rows.empty:
         raise GonioError("no tilt_estimate rows in the readings", file=file)
+    if rows["round"].duplicated().any():
+        dup = sorted(int(r) for r in rows.loc[rows["round"].duplicated(), "round"].unique())
+        raise GonioError(f"tilt_estimate rounds {dup} appear more than once (one rest per "
+                         "round)", file=file, key="round")
+    rows = rows.sort_values("round", kind="stable")
     orients = rows["orientation"].unique() if "orientation" in rows else np.array(["up"])
     if len(orients) != 1 or rows["series"].nunique() != 1:
         raise GonioError("tilt_estimate rows must share one orientation and one series "

@@ -143,14 +143,14 @@ class _Planner:
 
     def tilt_estimate(self, plan) -> None:
         """Static multi-position block (``[tilt_estimate]``): rest at N equally spaced
-        positions; each reading is the uncompensated count over one dwell."""
+        positions, in the plan's order (``plan.order_deg``); each reading is the
+        uncompensated count over one dwell."""
         tab = self.b.table
         tl = Timeline(start_angle_deg=self.true_position(0.0), t0_s=self.k * self.dt)
         blk = Block(f"tilt_estimate {plan.orientation}", plan.orientation, tl, self.k, self.k,
                     None, compensate=False)
         rate = plan.rate_dps * (1.0 + tab.rate_error_rel)
-        for i in range(plan.positions):
-            x = 360.0 * i / plan.positions
+        for i, x in enumerate(plan.order_deg):
             if i:
                 self._move(blk, tl, self.true_position(x), rate, tab.accel_dps2)
             tl.dwell(plan.settle_s)
