@@ -95,6 +95,13 @@ def test_typo_in_a_tilt_row_is_set_aside(sim, tmp_path, add):
     assert not [f for f in res["findings"] if f["code"] == "tilt-beyond-bound"]
     html = (tmp_path / "o" / "certificate.html").read_text()
     assert "departs from the fit the other positions draw" in html
+    # its pair is incomplete: u from the residuals, and the calibration says so; the clean
+    # file's six pairs give the pairs' u
+    tc = res["items"]["scale_factor"]["details"]["tilt_correction"]
+    assert (tc["basis"], tc["dof"]) == ("residuals", 8)
+    assert "do not form complete opposite pairs" in json.dumps(res)
+    clean = calibrate(sim, tmp_path / "c")["items"]["scale_factor"]["details"]["tilt_correction"]
+    assert (clean["basis"], clean["dof"]) == ("opposite pairs", 4)
 
 
 def bound_line_u(res: dict) -> float:

@@ -192,3 +192,36 @@ def test_protocol_file_and_cli(tmp_path, capsys):
     assert len(d["positions"]) == 8
     assert main(["tilt-estimate", str(out["readings"])]) == 0
     assert "ψ = 0.3000°" in capsys.readouterr().out
+
+
+def _te_rows(order_deg, rate):
+    import pandas as pd
+    th = np.asarray(order_deg, dtype=float)
+    return pd.DataFrame({"test": "tilt_estimate", "series": 1, "round": np.arange(1, th.size + 1),
+                         "orientation": "up", "time_s": 100.0, "table_deg": th,
+                         "gyro_counts": rate(th) * 100.0})
+
+
+def test_the_rests_are_read_in_the_order_of_round_whatever_the_rows():
+    """The basis comes from the order the rests were taken (``round``), not the file's row
+    order: the programme's pairs shuffled are still pairs (same ψ, α, u); the same positions
+    with rounds in order of θ are read with the residuals' u; a round given twice is
+    refused by name."""
+    rng = np.random.default_rng(3)
+    # ″/s (K = 3600 counts/°: one count per arcsecond)
+    rate = lambda th: 9.7 + 0.02 * np.cos(np.radians(th + 30.0)) + rng.normal(0.0, 5e-4, th.size)
+    df = _te_rows(TiltEstimatePlan(positions=12).order_deg, rate)
+    e = tilt_estimate_from_readings(df, 3600.0, 40.0)
+    shuffled = df.sample(frac=1.0, random_state=1)
+    assert list(shuffled["round"]) != list(df["round"])
+    e2 = tilt_estimate_from_readings(shuffled, 3600.0, 40.0)
+    assert e.basis == e2.basis == "opposite pairs" and e.dof == 4
+    assert (e2.tilt_deg, e2.u_tilt_deg, e2.u_phase_deg) == (e.tilt_deg, e.u_tilt_deg,
+                                                            e.u_phase_deg)
+    seq = df.sort_values("table_deg").assign(round=np.arange(1, 13))
+    e3 = tilt_estimate_from_readings(seq, 3600.0, 40.0)
+    assert e3.basis == "residuals" and e3.dof == 9
+    assert e3.tilt_deg == pytest.approx(e.tilt_deg, rel=1e-12)      # same LS coefficients
+    twice = df.assign(round=[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 11])
+    with pytest.raises(GonioError, match=r"rounds \[11\] appear more than once"):
+        tilt_estimate_from_readings(twice, 3600.0, 40.0)

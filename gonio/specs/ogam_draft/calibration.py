@@ -2668,9 +2668,10 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
             f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
             f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"
             + ("" if tc.basis == BASIS_PAIRS else
-               "; the rests were not taken in opposite pairs: u(psi) and u(azimuth) are the "
-               "fit residuals', which assume the rests' errors uncorrelated (a bias that "
-               "wanders over several rests makes them too small)")))
+               "; the rests do not form complete opposite pairs (taken in another order, or "
+               "a rest set aside): u(psi) and u(azimuth) are the fit residuals', which "
+               "assume the rests' errors uncorrelated (a bias that wanders over several "
+               "rests makes them too small)")))
     if "scale_factor" in items and res.scale_factor.measured:
         p_note = _scale_factor_positions(res.scale_factor.table, proto)[2]
         if p_note:
