@@ -26,7 +26,7 @@ from gonio.specs.ogam_draft.bench.config import Harmonic
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs.ogam_draft.readings import Readings, read_readings
-from gonio.specs.ogam_draft.screen import (line_critical_value, line_departures,
+from gonio.specs.ogam_draft.screen import (SCREEN_ALPHA, line_critical_value, line_departures,
                                            repeated_reference_scale, screen)
 from gonio.specs.ogam_draft.study import study_bench
 from gonio.specs.ogam_draft.truth import truth_from_session
@@ -80,23 +80,35 @@ def test_the_reviewers_three_quarter_arcsec_typo_is_set_aside_and_E_comes_back(r
 
 
 def test_a_typo_of_three_quarters_of_an_arcsec_on_clean_sessions(tmp_path):
-    """Clean sessions of the built-in programme (RLG and FOG, several seeds): nothing set
-    aside; the same sessions with 0.75″ (RLG: 16 counts of 0.047″) or 1.5″ (FOG: 30 counts
-    of 0.05″, its readings scatter 0.13″ against the RLG's 0.09″) added to one 7.1 reading:
-    that reading is set aside, nothing else. (FOG 1″ at the 360° end, where the others' line
-    is extrapolated, is within the rule's threshold: docs/draft-readings.md.)"""
+    """Clean sessions of the built-in programme (RLG and FOG, 20 seeds each), and the same
+    sessions with 0.75″ (RLG: 16 counts of 0.047″) or 1.5″ (FOG: 30 counts of 0.05″, its
+    readings scatter 0.13″ against the RLG's 0.09″) added to one 7.1 reading: that reading
+    is set aside in every session. The rule is a test at the session's false-alarm
+    probability ``SCREEN_ALPHA`` (2 %), so a clean reading is set aside now and then — in
+    the clean sessions, or in the second pass once the typo is out (FOG seed 2: its 360°
+    reading, extrapolated from four others, by 0.69″ against 0.65″) — and never more often
+    than binomial scatter of 2 % allows: at most 3 of 20 (P = 0.0007). (FOG 1″ at the 360°
+    end, where the others' line is extrapolated, is within the rule's threshold:
+    docs/draft-readings.md.)"""
+    from scipy.stats import binom
     p = load_protocol("ogam-draft")
+    n = 20
+    most = int(binom.ppf(0.999, n, SCREEN_ALPHA))
+    assert most == 3
     for name, size in (("rlg", 0.75), ("fog", 1.5)):
         bench = study_bench(load_bench(name), 100.0)
-        for seed in (1, 2, 3, 4, 5):
+        clean_alarms = extra = 0
+        for seed in range(1, n + 1):
             df, md, _ = _sim(bench, seed, p)
-            assert [f.message for f in _set_aside(df, md, p)] == [], (name, seed)
+            clean_alarms += bool(_set_aside(df, md, p))
             k = float(md["nominal_scale_factor_counts_per_deg"])
             i = int(np.flatnonzero(df["test"] == "scale_factor")[seed % 6])
             d2 = df.copy()
             d2.at[i, "gyro_counts"] += (-1) ** seed * round(size / ARCSEC_PER_DEG * k)
             got = [(f.line, f.clause) for f in _set_aside(d2, md, p)]
-            assert got == [(int(df.at[i, "line"]), "7.1")], (name, seed, got)
+            assert (int(df.at[i, "line"]), "7.1") in got, (name, seed, got)
+            extra += len(got) > 1
+        assert clean_alarms <= most and extra <= most, (name, clean_alarms, extra)
 
 
 def test_a_nonlinearity_repeated_in_every_round_is_kept_and_measured():

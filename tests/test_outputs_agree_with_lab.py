@@ -75,6 +75,13 @@ def lab_text(spec: str) -> str:
                                  f'source = "limit of {k}"\n' for k, v in limits)
 
 
+#: The demo's seed per specification where the default one does not serve: the optical
+#: draft's seed 7 states two non-negative items whose bias-corrected estimate fell below
+#: zero (K_l, C_v), which the sign test below needs (seed 0 has none since the tilt
+#: estimate's rests are taken in opposite pairs and the timeline moved).
+SEEDS = {"ogam-draft": 7}
+
+
 @pytest.fixture(scope="module", params=list(CASES))
 def issued(request, tmp_path_factory):
     spec = request.param
@@ -83,7 +90,8 @@ def issued(request, tmp_path_factory):
     lab.write_text(lab_text(spec), encoding="utf-8")
     out = {}
     d = root / "en"
-    assert main(["demo", "--spec", spec, "--lab", str(lab), "--out", str(d)]) == 0
+    assert main(["demo", "--spec", spec, "--seed", str(SEEDS.get(spec, 0)), "--lab", str(lab),
+                 "--out", str(d)]) == 0
     # the Chinese certificate of the same stored result (the renderer is a pure function of
     # results.json and the laboratory file; the calibration is not made twice)
     render_folder((d / "results.json").read_bytes(), root / "zh", spec_key=spec, lab=lab,
@@ -455,7 +463,7 @@ def test_dcc_value_is_the_stated_value_with_its_sign(issued):
     and digits: a negative mean or bias (the triad's M_yx, b_y …) is written with its minus
     sign, worked out here from results.json's float and the printed decimals of the
     certificate's span (Decimal half-up, an independent rounding); a non-negative item whose
-    bias-corrected estimate fell below zero (the optical C_g at this seed, stated "≤ upper"
+    bias-corrected estimate fell below zero (the optical K_l and C_v at seed 7, stated "≤ upper"
     with its note) is written as that bound, results.json's ``upper_bound`` and the end of
     its interval, never as the negative estimate the certificate does not print."""
     from decimal import ROUND_HALF_UP, Decimal

@@ -2572,6 +2572,24 @@ def programme_conditions(proto: Protocol) -> dict:
     return {"rates_dps": rates, "orientations": orients, "scale_factor_deg": sf}
 
 
+
+def tilt_correction_note(tc) -> str:
+    """The calibration's note on K corrected by the measured tilt
+    (:class:`~gonio.specs.ogam_draft.budget_extra.TiltCorrection`): ψ, α and their U95,
+    and, where the rests do not form complete opposite pairs, that their u is the fit
+    residuals' (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`)."""
+    from gonio.specs.ogam_draft.tilt_estimate import BASIS_PAIRS
+
+    return (f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
+            f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
+            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"
+            + ("" if tc.basis == BASIS_PAIRS else
+               "; the rests do not form complete opposite pairs (taken in another order, or "
+               "a rest set aside): u(psi) and u(azimuth) are the fit residuals', which "
+               "assume the rests' errors uncorrelated (a bias that wanders over several "
+               "rests makes them too small)"))
+
+
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
             *, monte_carlo_trials: int = 0, seed: int = 0,
             static_record: StaticRecord | None = None, budget: str = "physical",
@@ -2661,17 +2679,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
             res = dataclasses.replace(res, **{name: with_corrected_tables(getattr(res, name),
                                                                           c2)})
     if proto.tilt_estimate is not None and "scale_factor" in items:
-        from gonio.specs.ogam_draft.tilt_estimate import BASIS_PAIRS
         tc = items["scale_factor"].correction
-        notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
-            f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
-            f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
-            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"
-            + ("" if tc.basis == BASIS_PAIRS else
-               "; the rests do not form complete opposite pairs (taken in another order, or "
-               "a rest set aside): u(psi) and u(azimuth) are the fit residuals', which "
-               "assume the rests' errors uncorrelated (a bias that wanders over several "
-               "rests makes them too small)")))
+        notes.append(tilt_correction(res, kept, proto)[1] if tc is None else
+                     tilt_correction_note(tc))
     if "scale_factor" in items and res.scale_factor.measured:
         p_note = _scale_factor_positions(res.scale_factor.table, proto)[2]
         if p_note:
