@@ -105,3 +105,35 @@ def test_no_posterior_falls_back_to_the_bound_not_to_zero(readings, plain, monke
     smaller = [k for k in DRIFT_ITEMS if now[k][1] is not None and plain[k][1] is not None
                and now[k][1] < plain[k][1] * (1 - 1e-9)]
     assert not smaller, f"U fell below the posterior mean's without a walk term: {smaller}"
+
+
+def test_the_ratiometric_rest_points_take_the_windows_covariance(readings, monkeypatch):
+    """5.3.3.3's drift line between a supply's rest point and V_BASE's is the five-term
+    model's covariance of the two rest windows (``items.window_drift_u_dps``), not the
+    adjacent records' floor (``items.drift_u_dps`` at their separation): the supply runs are
+    minutes apart, where the flicker's difference has grown past that floor. Each call's
+    windows are the rest points' (start, span), minutes apart; the stated line is the
+    windows' u in output units, and larger than the floor's at the same separation (on the
+    old rule the two were equal: 400-trial coverage 0.935, z mean +0.26 → 0.960, +0.15)."""
+    from gonio.specs.iec62047_20 import items as I
+
+    calls = []
+    real = I.window_drift_u_dps
+
+    def spy(ctx, first, second):
+        u = real(ctx, first, second)
+        calls.append((ctx, first, second, u))
+        return u
+
+    monkeypatch.setattr(I, "window_drift_u_dps", spy)
+    res = calibrate(readings, PROTOCOL)
+    it = dict((i.key, i) for i in res.items)["bias_ratiometric_error"] \
+        if not isinstance(res.items, dict) else res.items["bias_ratiometric_error"]
+    drift = next(c for c in it.uncertainty.components if c["symbol"] == "drift")
+    ours = [(ctx, f, s, u) for ctx, f, s, u in calls
+            if abs(u * abs(ctx.a_base) - drift["u"]) <= 1e-12 * drift["u"]]
+    assert ours, [(f, s) for _, f, s, _ in calls]
+    ctx, first, second, u = ours[0]
+    sep = abs(first[0] - second[0])
+    assert sep > 60.0 and first[1] > 0 and second[1] == first[1]
+    assert u > 1.05 * I.drift_u_dps(ctx, sep)

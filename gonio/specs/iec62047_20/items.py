@@ -130,7 +130,8 @@ def _sf_runs(ctx: Context, test: str) -> list[dict]:
             for k, f in ((slice(None), 1.0), (cw, math.sqrt(2)), (ccw, math.sqrt(2))))
         out.append({"run": run, "x": x, "y": y, "a": a, "b": b, "se": se,
                     "u_a": u_a, "nu_a": nu_a, "u_a_cw": u_cw, "nu_a_cw": nu_cw,
-                    "u_a_ccw": u_ccw, "nu_a_ccw": nu_ccw, "t": tt, "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": u_y})
+                    "u_a_ccw": u_ccw, "nu_a_ccw": nu_ccw, "t": tt, "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": u_y,
+                    "n": np.array([m.n for m in pts])})
     ctx.cache[("sf", test)] = out
     return out
 
@@ -3053,7 +3054,10 @@ def bias_ratiometric(ctx: Context) -> Item:
     a_Vi − a_BASE·V_i/V_BASE in output units in the details. Analog ratiometric outputs only.
 
     Uncertainty: the noise of the two rest means (block type A), the bias drift between
-    them (RRW, bias instability from the static record), and the selection excess of the
+    them (RRW, bias instability from the static record, through the five-term model's
+    covariance of the two rest windows, :func:`window_drift_u_dps`: the runs are minutes
+    apart, where the flicker's difference has grown past the adjacent records' floor that
+    :func:`drift_u_dps` holds — 22 % more on the demo's 520 s), and the selection excess of the
     largest |R_Vi| over the supplies (JCGM 100 4.3.7, the rule of 5.3.3.5 and 5.3.3.7,
     :func:`gonio.specs._rate_family.formulas.selection_excess`): a supply below and one above
     V_BASE usually carry departures of equal size and opposite sign (a bias linear in V), so
@@ -3065,20 +3069,21 @@ def bias_ratiometric(ctx: Context) -> Item:
         return m
     runs = _sf_runs(ctx, "ratiometric")
     V = np.array([c["V"] for c in runs])
-    a, ua, t_rest = [], [], []
+    a, ua, window = [], [], []
+    dt = float(ctx.protocol["protocol"]["sample_interval_s"])
     for c in runs:
         k = np.flatnonzero(c["x"] == 0)
         if k.size != 1:
             raise GonioError(f"ratiometric run {c['run']}: needs exactly one rest point (0 °/s)")
         a.append(float(c["y"][k[0]]))
         ua.append(float(c["u_y"][k[0]]))
-        t_rest.append(float(c["t"][k[0]]))
+        window.append((float(c["t"][k[0]]), float(c["n"][k[0]]) * dt))    # (start s, span s)
     a = np.array(a)
     ib = int(np.argmin(np.abs(V - ctx.v_base)))
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
 
     def inputs(i):
-        u_dr = drift_u_dps(ctx, t_rest[i] - t_rest[ib]) * abs(ctx.a_base)      # output units
+        u_dr = window_drift_u_dps(ctx, window[i], window[ib]) * abs(ctx.a_base)  # output units
         return [from_u("a_Vi", a[i], ua[i], dof=DOF_U_WITHIN_10PCT, source=f"rest output at {V[i]:g} V"),
                 from_u("a_Vb", a[ib], ua[ib], dof=DOF_U_WITHIN_10PCT, source=f"rest output at {V[ib]:g} V"),
                 from_u("drift", 0.0, u_dr, dof=DOF_U_WITHIN_10PCT,
