@@ -314,7 +314,7 @@ class TiltCorrection:
     k95: float                  # Student-t factor for 95 % with ν = dof
     n_positions: int
     orientation: str            # the tilt estimate's table axis
-    basis: str = "residuals"    # how the fit's u was found (tilt_estimate.fit_first_harmonic)
+    basis: str                  # how the fit's u was found (tilt_estimate.fit_first_harmonic)
 
     def to_dict(self) -> dict:
         """Plain dict (results.json); the 95 % expanded uncertainties of ψ and α beside u."""

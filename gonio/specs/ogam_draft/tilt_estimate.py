@@ -308,16 +308,16 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
     rows = df[df["test"] == "tilt_estimate"]
     if rows.empty:
         raise GonioError("no tilt_estimate rows in the readings", file=file)
-    if rows["round"].duplicated().any():
-        dup = sorted(int(r) for r in rows.loc[rows["round"].duplicated(), "round"].unique())
-        raise GonioError(f"tilt_estimate rounds {dup} appear more than once (one rest per "
-                         "round)", file=file, key="round")
-    rows = rows.sort_values("round", kind="stable")
     orients = rows["orientation"].unique() if "orientation" in rows else np.array(["up"])
     if len(orients) != 1 or rows["series"].nunique() != 1:
         raise GonioError("tilt_estimate rows must share one orientation and one series "
                          f"(found orientations {sorted(map(str, orients))}, series "
                          f"{sorted(rows['series'].unique().tolist())})", file=file)
+    if rows["round"].duplicated().any():
+        dup = sorted(int(r) for r in rows.loc[rows["round"].duplicated(), "round"].unique())
+        raise GonioError(f"tilt_estimate rounds {dup} appear more than once (one rest per "
+                         "round)", file=file, key="round")
+    rows = rows.sort_values("round", kind="stable")
     if latitude_deg is None:
         latitude_deg = metadata_float(md, "latitude_deg", file=file)
         if latitude_deg is None:
