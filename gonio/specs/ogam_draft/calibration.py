@@ -441,7 +441,8 @@ class Analysis:
                     None if unc is None else Uncertainty(
                         unc["components"], unc["u_c"], unc["U"], unc["k"], unc["nu_eff"],
                         unc.get("monte_carlo"), unc.get("coverage_probability"),
-                        unc.get("k_source") or "", unc.get("interval"), unc.get("u_c_of")),
+                        unc.get("k_source") or "", unc.get("interval"), unc.get("u_c_of"),
+                        unc.get("interval_numerical_u")),
                     details, nonnegative=bool((unc or {}).get("nonnegative")))
 
     def result(self) -> Result:

@@ -157,6 +157,11 @@ class ItemUncertainty:
     #: built from (K_l, C_v, C_g: the range of the readings as corrected for the stated
     #: reading — table and measured tilt where they apply), or None.
     measured: float | None = field(default=None, repr=False, compare=False)
+    #: The standard uncertainty of ``interval``'s ends from the finite number of the
+    #: Monte Carlo's draws (JCGM 101 7.9; the range belts of K_l, C_v, C_g:
+    #: :func:`uncertainty.stdev.range_belt_numerical_u`), or None: the statement rule prints
+    #: no digit of the ends a rerun of the draws would change.
+    interval_numerical_u: float | None = None
 
     @property
     def U(self) -> float:
@@ -180,6 +185,8 @@ class ItemUncertainty:
             d["interval"] = [float(self.interval[0]), float(self.interval[1])]
         if self.nonnegative:
             d["nonnegative"] = True
+        if self.interval_numerical_u is not None:
+            d["interval_numerical_u"] = float(self.interval_numerical_u)
         return d
 
 
@@ -1429,6 +1436,37 @@ def shifted_belt(x, errors, shift: float) -> tuple[float, float]:
     """
     from uncertainty.stdev import range_belt_interval
 
+    if shift <= 0.0:
+        return range_belt_interval(x, errors)
+    below, above = _shifted_values(x, shift)
+    lo = 0.0 if below is None else range_belt_interval(below, errors)[0]
+    return float(lo), float(range_belt_interval(above, errors)[1])
+
+
+def shifted_belt_numerical_u(x, errors, shift: float) -> float:
+    """The standard uncertainty of :func:`shifted_belt`'s ends from the finite number of
+    ``errors`` draws (JCGM 101 7.9; :func:`uncertainty.stdev.range_belt_numerical_u` of the
+    belt each end is taken from), the larger of the two: the decimal place the interval is
+    stated at (:func:`gonio.result.statement.state_interval`).
+
+    >>> from uncertainty.stdev import range_belt_numerical_u
+    >>> e = np.random.default_rng(1).normal(0.0, 1.0, (4000, 2))
+    >>> shifted_belt_numerical_u([0.0, 4.0], e, 0.0) == max(range_belt_numerical_u([0.0, 4.0], e))
+    True
+    """
+    from uncertainty.stdev import range_belt_numerical_u
+
+    if shift <= 0.0:
+        return float(max(range_belt_numerical_u(x, errors)))
+    below, above = _shifted_values(x, shift)
+    u_lo = 0.0 if below is None else range_belt_numerical_u(below, errors)[0]
+    return float(max(u_lo, range_belt_numerical_u(above, errors)[1]))
+
+
+def _shifted_values(x, shift: float):
+    """The values of :func:`shifted_belt`'s two belts (``shift`` > 0): ``x`` with its range r
+    moved to r − ``shift`` (None where that is ≤ 0: the lower end is 0) and to r + ``shift``,
+    along the measured pattern."""
     x = np.asarray(x, dtype=float)
     m, r = float(x.mean()), float(x.max() - x.min())
     if r > 0:
@@ -1437,10 +1475,7 @@ def shifted_belt(x, errors, shift: float) -> tuple[float, float]:
         unit = np.zeros(x.size)
         unit[-1] = 1.0
         unit -= unit.mean()
-    if shift <= 0.0:
-        return range_belt_interval(x, errors)
-    lo = 0.0 if r - shift <= 0.0 else range_belt_interval(m + (r - shift) * unit, errors)[0]
-    return float(lo), float(range_belt_interval(m + (r + shift) * unit, errors)[1])
+    return (None if r - shift <= 0.0 else m + (r - shift) * unit), m + (r + shift) * unit
 
 
 def _range_table_line(bound: float, belt, worst: RangeTableOrder) -> _Line:
@@ -1534,7 +1569,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
     (0.01389, 0.01377, [133.49, 143.96])
     """
-    from uncertainty.stdev import corrected_range
+    from uncertainty.stdev import corrected_range, range_belt_numerical_u
 
     if table_reading not in TABLE_READINGS:
         raise ValueError(f"table_reading must be one of {', '.join(TABLE_READINGS)}")
@@ -1576,10 +1611,14 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         # every table within its MPE moves the range by at most ``bound`` draw by draw, so
         # the noise belt at the measured range −/+ it holds K_l for every such table (≥ 95 %)
         lo, hi = shifted_belt(k_i * to_pct, errs[table_reading], bound)
+        num_u = shifted_belt_numerical_u(k_i * to_pct, errs[table_reading], bound)
         lines.append(_range_table_line(bound, c.interval, worst))
+    else:
+        num_u = max(range_belt_numerical_u(k_i * to_pct, errs[table_reading]))
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
-    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
+                   interval_numerical_u=num_u)
 
 
 def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibration, *,
@@ -1616,7 +1655,7 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     >>> abs(b.value / q.value - 1.0) < 0.01, [c.symbol for c in b.components]
     (True, ['K_rng'])
     """
-    from uncertainty.stdev import corrected_range
+    from uncertainty.stdev import corrected_range, range_belt_numerical_u
 
     k_i, th, n, kbar, _, u_q = _rounds(k_i, theta_deg, 0.0)
     to_pct = 100.0 / kbar
@@ -1642,7 +1681,9 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
-                   measured=float(c.measured))
+                   measured=float(c.measured),
+                   interval_numerical_u=max(range_belt_numerical_u(k_i * to_pct,
+                                                                   errs["calibrated"])))
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -2110,7 +2151,7 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     >>> 0.70 < b.value < 0.7716, [round(x, 2) for x in b.interval]
     (True, [0.48, 1.06])
     """
-    from uncertainty.stdev import corrected_range
+    from uncertainty.stdev import corrected_range, range_belt_numerical_u
 
     cs = list(conditions)
     if len(cs) < 2:
@@ -2165,8 +2206,11 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
         lo = max(max(value, lo - bias * f) - math.hypot(below, w), 0.0)
         hi = value + math.hypot(above, w)
     b = _budget(item, unit, _in_belt(value, lo, hi), lines, k=k, interval=(lo, hi))
+    # the belt's ends' numerical u carried to the stated ends (the shift and the selection's
+    # quadrature move each end by at most the belt's own end's change)
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
-                   measured=float(c.measured))
+                   measured=float(c.measured),
+                   interval_numerical_u=max(range_belt_numerical_u(x * f, err * f)))
 
 
 def _in_belt(value: float, lo: float, hi: float) -> float:
