@@ -71,3 +71,31 @@ def test_without_tilt_estimate_k_has_no_tilt_description(tmp_path):
     assert len(descs) == (src == "jcgm101-convolution")
     assert all("JCGM 101" in d for d in descs)
     assert "measured in situ" not in (cal / "certificate.html").read_text("utf-8")
+
+
+def test_every_printed_psi_is_stated_by_one_rule(shared_demo):
+    """The optical demo measures its tilt in situ: every ψ and α the outputs print — the K
+    note, the K-as-mounted paragraph, the E correction's note and budget line, the
+    calibration's notes in results.json and summary.txt, the DCC — is the one statement rule's
+    (the value at its U95's decimal place), so a certificate never shows ψ two ways."""
+    from gonio.result.statement import state
+
+    out = shared_demo("ogam-draft")
+    res = json.loads((out / "results.json").read_text("utf-8"))
+    tc = res["items"]["scale_factor"]["details"]["tilt_correction"]
+    psi = state(tc["tilt_deg"], tc["U95_tilt_deg"]).value_text
+    az = state(tc["azimuth_deg"], tc["U95_azimuth_deg"]).value_text
+    texts = {"summary.txt": (out / "summary.txt").read_text("utf-8"),
+             "results.json": (out / "results.json").read_text("utf-8"),
+             "certificate.dcc.xml": (out / "certificate.dcc.xml").read_text("utf-8"),
+             "certificate.html": html.unescape(re.sub(
+                 r"<[^>]+>", "", (out / "certificate.html").read_text("utf-8"))).replace(
+                     "\xa0", " ")}
+    seen = 0
+    for name, t in texts.items():
+        for m in re.finditer(r"(?:psi|ψ) = ([0-9.]+) ?(?:°|deg)", t):
+            assert m.group(1) == psi, (name, t[max(m.start() - 80, 0):m.end() + 40], psi)
+            seen += 1
+        for m in re.finditer(r"azimuth ([0-9.]+) ?(?:°|deg)", t):
+            assert m.group(1) == az, (name, t[max(m.start() - 80, 0):m.end() + 40], az)
+    assert seen >= 6

@@ -465,6 +465,8 @@ class AngleTiltCorrection:
     dof: int
     tilt_deg: float
     azimuth_deg: float
+    U95_tilt_deg: float         # the estimate's U95 of ψ and α (k95 · u), as K's correction
+    U95_azimuth_deg: float
 
 
 def angle_tilt_correction(scale_factor_rows: pd.DataFrame, angle_rows: pd.DataFrame,
@@ -534,7 +536,9 @@ def angle_tilt_correction(scale_factor_rows: pd.DataFrame, angle_rows: pd.DataFr
     cov = correction.r_tilt_azimuth * u_psi * u_gam
     var = g_psi ** 2 * u_psi ** 2 + 2.0 * g_psi * g_gam * cov + g_gam ** 2 * u_gam ** 2
     return AngleTiltCorrection(err, np.sqrt(np.maximum(var, 0.0)), int(correction.dof),
-                               float(correction.tilt_deg), float(correction.azimuth_deg))
+                               float(correction.tilt_deg), float(correction.azimuth_deg),
+                               float(correction.k95 * correction.u_tilt_deg),
+                               float(correction.k95 * correction.u_azimuth_deg))
 
 
 def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,

@@ -37,6 +37,7 @@ from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.result import Finding
 from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty
+from gonio.result.statement import round_half_up, state
 from gonio.specs.ogam_draft.chamber import logged_chamber_temperature
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES, chamber_temperature_line
 from gonio.specs.ogam_draft import table_calibration as tcal
@@ -617,9 +618,10 @@ def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float,
     out["tilt_measured"] = {"tilt_deg": psi, "U95_tilt_deg": big_u,
                             "k95": float(tilt_correction.k95), "own_rel_ppm": rel(psi),
                             "own_rel_interval_ppm": [lo, hi]}
+    st = state(psi, big_u)                  # ψ at U's decimal place, as the certificate
     out["measurand"] = (f"K as mounted: the tilt of the sensing axis from the rotation axis "
-                        f"measured in situ (beyond the draft), psi = {psi:.3g}° (U95 "
-                        f"{big_u:.2g}°); the instrument's own K (sensing axis along the "
+                        f"measured in situ (beyond the draft), psi = {st.value_text}° (U95 "
+                        f"{st.U_text}°); the instrument's own K (sensing axis along the "
                         f"rotation axis) is K/cos psi, {rel(psi):.2g} ppm above K (95 % "
                         f"interval [{lo:.2g}, {hi:.2g}] ppm), not included in U; A.1's bound "
                         f"{tilt_bound_deg:g}° would allow up to {(1 / c - 1) * 1e6:.2g} ppm")
@@ -1430,11 +1432,13 @@ def tilt_beyond_bound(results, readings, protocol, settings: dict) -> tuple[dict
         return {**settings, "tilt_bound_deg": psi + big_u}, []   # the tilt's upper limit
     rows = readings.data[readings.data["test"] == "tilt_estimate"]
     line = int(rows["line"].min()) if len(rows) else None
-    msg = (f"the in-situ tilt estimate measured psi = {psi:.3g}° (U95 {big_u:.2g}°, interval "
-           f"[{psi - big_u:.3g}, {psi + big_u:.3g}]°), beyond the stated tilt bound "
+    st = state(psi, big_u)                  # ψ, U and the ends at U's decimal place
+    at = lambda x: round_half_up(x, st.decimals)  # noqa: E731
+    msg = (f"the in-situ tilt estimate measured psi = {at(psi)}° (U95 {st.U}°, interval "
+           f"[{at(psi - big_u)}, {at(psi + big_u)}]°), beyond the stated tilt bound "
            f"{bound:g}° (tilt_bound_deg, Annex A.1): the mounting does not meet the bound; K "
            "and E stay corrected at the measured tilt, and every line taken at the bound is "
-           f"taken at psi + U95 = {psi + big_u:.3g}°")
+           f"taken at psi + U95 = {at(psi + big_u)}°")
     return ({**settings, "tilt_bound_deg": psi + big_u},
             [Finding("tilt-beyond-bound", msg, "flagged", file=None if readings.path is None
                      else str(readings.path), line=line, test="tilt_estimate", clause="A.1",
@@ -1452,6 +1456,26 @@ def _tilt_bound_settings(res, kept, proto, settings: dict, findings) -> tuple[di
                 f"95 % limit psi + U95 = {settings['tilt_bound_deg']:.3g} deg, above the "
                 f"stated bound {float(stated_bound):g} deg (A.1) [beyond the draft]")
     return settings, list(findings) + beyond, note
+
+
+def tilt_text(psi_deg: float, U95_psi_deg: float, azimuth_deg: float | None = None,
+              U95_azimuth_deg: float | None = None) -> str:
+    """The calibration's notes' text of a measured tilt: "psi = ψ deg (U95 U deg)" and, with
+    an azimuth, ", azimuth α deg (U95 U deg)" — each value at its U's decimal place, U to two
+    significant digits (:func:`gonio.result.statement.state`, the rule the certificate
+    states them by, so a note and the certificate print the same ψ).
+
+    >>> tilt_text(0.04512, 0.00661, 29.61, 8.43)
+    'psi = 0.0451 deg (U95 0.0066 deg), azimuth 29.6 deg (U95 8.4 deg)'
+    >>> tilt_text(0.04512, 0.0203)
+    'psi = 0.045 deg (U95 0.020 deg)'
+    """
+    p = state(float(psi_deg), float(U95_psi_deg))
+    out = f"psi = {p.value_text} deg (U95 {p.U_text} deg)"
+    if azimuth_deg is not None:
+        a = state(float(azimuth_deg), float(U95_azimuth_deg))
+        out += f", azimuth {a.value_text} deg (U95 {a.U_text} deg)"
+    return out
 
 
 def beyond_bound(tc, bound_deg: float) -> bool:
@@ -1579,12 +1603,14 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
         tm = tilt_measured
         extras = [e if e.symbol != "tilt_E" else ExtraComponent(
             "tilt_Em", f"tilt x Earth-rate coupling corrected at the measured tilt "
-            f"(psi = {tm.tilt_deg:.3g} deg, azimuth {tm.azimuth_deg:.1f} deg): the correction's "
+            f"({tilt_text(tm.tilt_deg, tm.U95_tilt_deg, tm.azimuth_deg, tm.U95_azimuth_deg)}):"
+            f" the correction's "
             f"u from the tilt estimate's covariance (nu = {tm.dof})",
             float(np.max(tm.u_arcsec)) if tm.u_arcsec.size else 0.0, "normal")
             for e in extras]
         notes.append("E corrected for the tilt x Earth-rate coupling at the measured tilt "
-                     f"psi = {tm.tilt_deg:.3g} deg, azimuth {tm.azimuth_deg:.1f} deg (largest "
+                     + tilt_text(tm.tilt_deg, tm.U95_tilt_deg, tm.azimuth_deg,
+                                 tm.U95_azimuth_deg) + " (largest "
                      f"correction {float(np.max(np.abs(tm.error_arcsec))):.3g} arcsec) "
                      "[beyond the draft]")
     return [ExtraComponent(e.symbol, e.source.replace(" (validation)", "") +
@@ -2581,9 +2607,9 @@ def tilt_correction_note(tc) -> str:
     residuals' (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`)."""
     from gonio.specs.ogam_draft.tilt_estimate import BASIS_PAIRS
 
-    return (f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
-            f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
-            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"
+    return (f"K corrected by the measured tilt "
+            + tilt_text(tc.tilt_deg, tc.k95 * tc.u_tilt_deg, tc.azimuth_deg,
+                        tc.k95 * tc.u_azimuth_deg) + " [beyond the draft]"
             + ("" if tc.basis == BASIS_PAIRS else
                "; the rests do not form complete opposite pairs (taken in another order, or "
                "a rest set aside): u(psi) and u(azimuth) are the fit residuals', which "

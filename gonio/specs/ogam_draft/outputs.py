@@ -94,10 +94,11 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
         # the estimate's line has no U; ψ, α and their U95 by the certificate's rules
         # (stated.k_tilt_note)
         lines.append(f"note: the stated K is corrected "
-                     f"by the measured tilt psi = {display('sig2', tc['tilt_deg'])} deg (U95 "
-                     f"{display('sig2', tc['U95_tilt_deg'])} deg) at azimuth "
-                     f"{display('sig3', tc['azimuth_deg'])} deg (U95 "
-                     f"{display('sig2', tc['U95_azimuth_deg'])} deg), beyond the draft")
+                     f"by the measured tilt psi = "
+                     f"{display('atU', tc['tilt_deg'], tc['U95_tilt_deg'])} deg (U95 "
+                     f"{display('U', tc['U95_tilt_deg'])} deg) at azimuth "
+                     f"{display('atU', tc['azimuth_deg'], tc['U95_azimuth_deg'])} deg (U95 "
+                     f"{display('U', tc['U95_azimuth_deg'])} deg), beyond the draft")
     tk = kd.get("table_calibration")
     e_table = ((d["items"].get("angle_deviation") or {}).get("details") or {}).get(
         "table_calibration")

@@ -335,11 +335,17 @@ def k_tilt_note(res: dict, L: dict) -> list:
     """K's note when the in-situ tilt estimate corrected it, as :func:`segments`: ψ and α with
     their U95 and the 7.1 mean uncorrected (results.json ``details.tilt_correction``,
     ``details.estimates``); the certificate's K cell and the DCC's K quantity state it."""
-    def tc(field: str, rule: str):
-        return num(res, item_path("scale_factor", f"tilt_correction.{field}"), rule, None)
+    d = res["items"]["scale_factor"]["details"]["tilt_correction"]
 
-    return segments(L["note_k_tilt"], p=tc("tilt_deg", "sig2"), up=tc("U95_tilt_deg", "sig2"),
-                    a=tc("azimuth_deg", "sig3"), ua=tc("U95_azimuth_deg", "sig2"),
+    def tc(field: str, rule: str, U: float | None = None):
+        return num(res, item_path("scale_factor", f"tilt_correction.{field}"), rule, U)
+
+    # each value at its U's decimal place, U to two significant digits: the one statement
+    # rule, as the K-as-mounted paragraph states ψ
+    return segments(L["note_k_tilt"], p=tc("tilt_deg", "atU", d.get("U95_tilt_deg")),
+                    up=tc("U95_tilt_deg", "U"),
+                    a=tc("azimuth_deg", "atU", d.get("U95_azimuth_deg")),
+                    ua=tc("U95_azimuth_deg", "U"),
                     v=num(res, item_path("scale_factor", "estimates.draft.value"), "atU",
                           res["items"]["scale_factor"]["uncertainty"]["U"]))
 
