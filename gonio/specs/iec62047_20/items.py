@@ -2524,8 +2524,27 @@ def _drift_draws(rng, nb: int, P: int, nr: int, dt: float, coef, n_mc: int) -> n
     lag = np.abs(pts[:, None] - pts[None, :]) / dt
     G = generalised_covariance(lag, [0.0, 0.0, b2, k2], dt)
     C = M @ G @ M.T
+    return rng.standard_normal((n_mc, nb)) @ _symmetric_root(C)
+
+
+def _symmetric_root(C: np.ndarray) -> np.ndarray:
+    """The symmetric square root S = V √Λ Vᵀ of the covariance ``C`` (negative eigenvalues
+    of rounding clipped to 0), so that z·S, z standard normal rows, has covariance C.
+
+    Why not V √Λ (the eigenvectors scaled): its columns are whatever basis ``eigh`` returns,
+    and where eigenvalues nearly coincide a change of C in its ninth digit turns that basis,
+    so the same normal numbers give other draws — the Monte Carlo's replicates are then no
+    longer common random numbers across two nearly equal inputs (a 1 ns change of the times
+    moved 5.3.3.5's interval ends by 0.6 of their numerical u). S is unique and continuous
+    in C: the same numbers give nearly the same draws.
+
+    >>> C = np.array([[2.0, 1e-12], [1e-12, 2.0 + 1e-13]])
+    >>> S, S2 = _symmetric_root(C), _symmetric_root(C + 1e-12 * np.eye(2)[::-1])
+    >>> bool(np.allclose(S @ S, C)), float(np.abs(S - S2).max()) < 1e-11
+    (True, True)
+    """
     ev, V = np.linalg.eigh(0.5 * (C + C.T))
-    return rng.standard_normal((n_mc, nb)) @ (V * np.sqrt(np.clip(ev, 0.0, None))).T
+    return (V * np.sqrt(np.clip(ev, 0.0, None))) @ V.T
 
 
 def _wander_draws(rng, x: np.ndarray, drift_u, n_mc: int) -> np.ndarray:
@@ -2540,9 +2559,7 @@ def _wander_draws(rng, x: np.ndarray, drift_u, n_mc: int) -> np.ndarray:
     C = 0.5 * (Dx[:, None] + Dx[None, :] - Dl)
     if not np.any(C):
         return np.zeros((n_mc, x.size))
-    ev, V = np.linalg.eigh(C)
-    L = V * np.sqrt(np.clip(ev, 0.0, None))
-    return rng.standard_normal((n_mc, x.size)) @ L.T
+    return rng.standard_normal((n_mc, x.size)) @ _symmetric_root(C)
 
 
 def startup_time(ctx: Context) -> Item:
