@@ -88,18 +88,24 @@ def test_typo_in_a_tilt_row_is_set_aside(sim, tmp_path, add):
     assert [(f["line"], f["action"], f["column"]) for f in found] == \
         [(line, "set_aside", "gyro_counts")]
     k = res["items"]["scale_factor"]["value"]
-    # ψ from the other eleven rests (numpy), not from the typo (which moved it to ~0.17°)
+    # ψ from the five complete opposite pairs left (numpy): not from the typo (which moved
+    # it to ~0.17°), nor from its partner, whose wander the pair no longer cancels
+    theta = float(tilt_rows(sim)[3][1][6])
+    partner = [ln for ln, p in tilt_rows(sim)
+               if abs((float(p[6]) - theta) % 360.0 - 180.0) < 1e-6]
+    assert len(partner) == 1
     psi = tilt_measured(res)["tilt_deg"]
-    assert psi == pytest.approx(psi_numpy(bad, k, skip={line}), rel=1e-4)
+    assert psi == pytest.approx(psi_numpy(bad, k, skip={line, *partner}), rel=1e-4)
     assert abs(psi - psi_numpy(sim, k)) < tilt_measured(res)["U95_tilt_deg"]
     assert not [f for f in res["findings"] if f["code"] == "tilt-beyond-bound"]
     html = (tmp_path / "o" / "certificate.html").read_text()
     assert "departs from the fit the other positions draw" in html
-    # its pair is incomplete: u from the residuals, and the calibration says so; the clean
-    # file's six pairs give the pairs' u
+    # its pair is incomplete: the partner left out, u from the five pairs (ν = 3), and the
+    # calibration says so; the clean file's six pairs give ν = 4
     tc = res["items"]["scale_factor"]["details"]["tilt_correction"]
-    assert (tc["basis"], tc["dof"]) == ("residuals", 8)
-    assert "do not form complete opposite pairs" in json.dumps(res)
+    assert (tc["basis"], tc["dof"]) == ("opposite pairs", 3)
+    assert tc["left_out_deg"] == [(theta + 180.0) % 360.0]
+    assert "is left out of the fit: its opposite partner was set aside" in json.dumps(res)
     clean = calibrate(sim, tmp_path / "c")["items"]["scale_factor"]["details"]["tilt_correction"]
     assert (clean["basis"], clean["dof"]) == ("opposite pairs", 4)
 

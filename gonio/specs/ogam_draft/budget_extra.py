@@ -315,10 +315,12 @@ class TiltCorrection:
     n_positions: int
     orientation: str            # the tilt estimate's table axis
     basis: str                  # how the fit's u was found (tilt_estimate.fit_first_harmonic)
+    left_out_deg: tuple         # rests left out of the fit (outside a complete opposite pair)
 
     def to_dict(self) -> dict:
         """Plain dict (results.json); the 95 % expanded uncertainties of ψ and α beside u."""
         d = dict(self.__dict__)
+        d["left_out_deg"] = list(self.left_out_deg)
         d.update(U95_tilt_deg=self.k95 * self.u_tilt_deg,
                  U95_azimuth_deg=self.k95 * self.u_azimuth_deg)
         return d
@@ -394,7 +396,8 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
         dof=int(fit.dof), tilt_deg=float(estimate.tilt_deg), u_tilt_deg=math.degrees(u_psi),
         azimuth_deg=float(estimate.tilt_azimuth_table_deg), u_azimuth_deg=math.degrees(u_al),
         r_tilt_azimuth=r, k95=float(estimate.k95), n_positions=int(estimate.n_positions),
-        orientation=str(estimate.orientation), basis=fit.basis)
+        orientation=str(estimate.orientation), basis=fit.basis,
+        left_out_deg=tuple(float(estimate.table["table_deg"].iloc[i]) for i in fit.left_out))
 
 
 @dataclass(frozen=True)

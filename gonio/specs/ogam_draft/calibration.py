@@ -2602,17 +2602,25 @@ def programme_conditions(proto: Protocol) -> dict:
 
 def tilt_correction_note(tc) -> str:
     """The calibration's note on K corrected by the measured tilt
-    (:class:`~gonio.specs.ogam_draft.budget_extra.TiltCorrection`): ψ, α and their U95,
-    and, where the rests do not form complete opposite pairs, that their u is the fit
-    residuals' (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`)."""
+    (:class:`~gonio.specs.ogam_draft.budget_extra.TiltCorrection`): ψ, α and their U95;
+    the rests left out of the fit (outside a complete opposite pair); and, where fewer than
+    three complete pairs remain, that their u is the fit residuals'
+    (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`)."""
     from gonio.specs.ogam_draft.tilt_estimate import BASIS_PAIRS
 
+    lone = ", ".join(f"{x:g}" for x in tc.left_out_deg)
     return (f"K corrected by the measured tilt "
             + tilt_text(tc.tilt_deg, tc.k95 * tc.u_tilt_deg, tc.azimuth_deg,
                         tc.k95 * tc.u_azimuth_deg) + " [beyond the draft]"
+            + ((f"; the rest at {lone} deg is left out of the fit: its opposite partner was "
+                if len(tc.left_out_deg) == 1 else
+                f"; the rests at {lone} deg are left out of the fit: their opposite partners "
+                "were ")
+               + f"set aside, and the pairs' u (nu = {tc.dof}) holds complete pairs only"
+               if tc.basis == BASIS_PAIRS and tc.left_out_deg else "")
             + ("" if tc.basis == BASIS_PAIRS else
-               "; the rests do not form complete opposite pairs (taken in another order, or "
-               "a rest set aside): u(psi) and u(azimuth) are the fit residuals', which "
+               "; the rests do not form three complete opposite pairs (taken in another "
+               "order, or rests set aside): u(psi) and u(azimuth) are the fit residuals', which "
                "assume the rests' errors uncorrelated (a bias that wanders over several "
                "rests makes them too small)"))
 

@@ -71,21 +71,32 @@ class HarmonicFit:
     fitted: np.ndarray
     residuals: np.ndarray
     basis: str = BASIS_RESIDUALS
+    #: indices (in the order taken) of rests left out of the fit: in the pairs' basis, the
+    #: rests outside a complete opposite pair (their partner set aside by screening)
+    left_out: tuple[int, ...] = ()
 
 
-def opposite_pairs(theta_deg) -> bool:
-    """Whether the positions, in the order the rests were taken, come in opposite pairs:
-    θ₂ = θ₁ + 180°, θ₄ = θ₃ + 180°, … (to ``OPPOSITE_TOL_DEG``), at least three pairs
-    (:attr:`gonio.specs.ogam_draft.protocol.TiltEstimatePlan.order_deg` takes them so).
+def opposite_pair_split(theta_deg) -> tuple[list[tuple[int, int]], list[int]]:
+    """The complete opposite pairs among rests taken in the order ``theta_deg`` and the rests
+    outside one: read in order, a rest and the next one 180° away (``OPPOSITE_TOL_DEG``)
+    form a pair; a rest whose next one is not opposite stands alone (its partner missing,
+    as where screening set one aside, or another order).
 
-    >>> opposite_pairs([0, 180, 30, 210, 60, 240]), opposite_pairs(np.arange(6) * 60.0)
-    (True, False)
+    >>> opposite_pair_split([0, 180, 30, 210, 60, 240, 270, 120, 300])
+    ([(0, 1), (2, 3), (4, 5), (7, 8)], [6])
+    >>> opposite_pair_split(np.arange(4) * 90.0)
+    ([], [0, 1, 2, 3])
     """
     th = np.asarray(theta_deg, dtype=float)
-    if th.size < 6 or th.size % 2:
-        return False
-    d = (th[1::2] - th[0::2]) % 360.0
-    return bool(np.all(np.abs(d - 180.0) <= OPPOSITE_TOL_DEG))
+    pairs, lone, i = [], [], 0
+    while i < th.size:
+        if i + 1 < th.size and abs((th[i + 1] - th[i]) % 360.0 - 180.0) <= OPPOSITE_TOL_DEG:
+            pairs.append((i, i + 1))
+            i += 2
+        else:
+            lone.append(i)
+            i += 1
+    return pairs, lone
 
 
 def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
@@ -95,7 +106,8 @@ def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
     The coefficients are the least-squares ones. Their uncertainty is the one documented
     choice of this estimate (the draft has no such test):
 
-    * **opposite pairs** (:func:`opposite_pairs`, the order the programme takes): the
+    * **opposite pairs** (at least three complete pairs in the order taken,
+      :func:`opposite_pair_split`; the order the programme takes): the
       difference within pair m, d_m = y(θ_m) − y(θ_m + 180°) = 2(a cos θ_m + b sin θ_m)
       + e_m, holds the first harmonic twice and, the two rests being one dwell apart, the
       bias's slow wander (drift, Gauss–Markov instability, rate random walk) hardly at all;
@@ -103,7 +115,9 @@ def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
       alone (the sums and differences are an orthogonal split of the data), so
       s² = Σ r_m² / (2(M − 2)) over the M pairs' residuals r_m gives Σ_ab = s²[(XᵀX)⁻¹]_ab
       with ν = M − 2; c0's variance is drawn from the sums' scatter (M − 1 degrees of
-      freedom), which holds the wander.
+      freedom), which holds the wander. A rest outside a complete pair (its partner set
+      aside by screening) is left out of the fit (``left_out``): in it the wander is not
+      cancelled, and the pairs' covariance would not describe a fit that holds it.
     * **residuals** (any other order): s² = RSS/(N − 3), ν = N − 3 (JCGM 100 H.3 for the
       straight-line analogue), which assumes the rests' errors uncorrelated. Rests taken in
       order of θ under a bias correlated over several dwells put the wander into the first
@@ -124,6 +138,10 @@ def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
     >>> f = fit_first_harmonic(th, y)                      # a wander the pairs cancel
     >>> (f.coef.round(12) + 0.0).tolist(), f.dof, round(f.residual_sd, 12), f.basis
     ([2.0, 1.1, 0.0], 1, 0.0, 'opposite pairs')
+    >>> th = [0, 180, 60, 240, 120, 300, 90]                # and one rest without its partner
+    >>> f = fit_first_harmonic(th, 2 + 1.1 * np.cos(np.radians(th)) + np.r_[0.3, 0.3, 0, 0, -0.3, -0.3, 5.0])
+    >>> (f.coef.round(12) + 0.0).tolist(), f.dof, f.basis, f.left_out
+    ([2.0, 1.1, 0.0], 1, 'opposite pairs', (6,))
     """
     th = np.radians(np.asarray(theta_deg, dtype=float))
     y = np.asarray(y, dtype=float)
@@ -134,26 +152,30 @@ def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
     if not (np.all(np.isfinite(th)) and np.all(np.isfinite(y))):
         raise GonioError("positions and rates must be finite numbers")
     x = np.column_stack([np.ones_like(th), np.cos(th), np.sin(th)])
-    xtx = x.T @ x
+    pairs, lone = opposite_pair_split(np.degrees(th))
+    paired = len(pairs) >= 3
+    used = np.array(sorted(i for p in pairs for i in p)) if paired else np.arange(th.size)
+    xtx = x[used].T @ x[used]
     if np.linalg.cond(xtx) > 1e10:
         raise GonioError("positions do not determine a first harmonic (spread them over 360°)")
-    coef = np.linalg.solve(xtx, x.T @ y)
+    coef = np.linalg.solve(xtx, x[used].T @ y[used])
     fitted = x @ coef
     res = y - fitted
     inv = np.linalg.inv(xtx)
-    if not opposite_pairs(np.degrees(th)):
+    if not paired:
         dof = th.size - 3
         s2 = float(res @ res) / dof
         return HarmonicFit(coef, s2 * inv, math.sqrt(s2), dof, fitted, res)
-    m = th.size // 2
-    r_d = res[0::2] - res[1::2]                 # residuals of the pair differences
+    first, second = (np.array([p[k] for p in pairs]) for k in (0, 1))
+    m = len(pairs)
+    r_d = res[first] - res[second]              # residuals of the pair differences
     dof = m - 2
     s2 = float(r_d @ r_d) / (2.0 * dof)
-    r_s = res[0::2] + res[1::2]                 # of the pair sums (mean zero: c0 fitted)
+    r_s = res[first] + res[second]              # of the pair sums (mean zero: c0 fitted)
     cov = s2 * inv
     cov[0, :] = cov[:, 0] = 0.0
-    cov[0, 0] = float(r_s @ r_s) / (2.0 * (m - 1)) / th.size
-    return HarmonicFit(coef, cov, math.sqrt(s2), dof, fitted, res, BASIS_PAIRS)
+    cov[0, 0] = float(r_s @ r_s) / (2.0 * (m - 1)) / (2 * m)
+    return HarmonicFit(coef, cov, math.sqrt(s2), dof, fitted, res, BASIS_PAIRS, tuple(lone))
 
 
 @dataclass
@@ -177,6 +199,8 @@ class TiltEstimate:
     residual_sd_arcsec_s: float
     table: pd.DataFrame = field(repr=False, default_factory=pd.DataFrame)   # in the order taken
     basis: str = BASIS_RESIDUALS        # how u was found (fit_first_harmonic)
+    #: table positions of the rests left out of the fit (outside a complete opposite pair)
+    left_out_deg: tuple[float, ...] = ()
 
     def to_dict(self) -> dict:
         """Plain dict (for ``--json``)."""
@@ -265,7 +289,8 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
         phase_deg=math.degrees(gamma), u_phase_deg=math.degrees(u_ph),
         tilt_azimuth_table_deg=(math.degrees(gamma + beta) + 180.0) % 360.0 - 180.0,
         dof=fit.dof, k95=float(student_t.ppf(0.975, fit.dof)),
-        residual_sd_arcsec_s=fit.residual_sd, table=table, basis=fit.basis)
+        residual_sd_arcsec_s=fit.residual_sd, table=table, basis=fit.basis,
+        left_out_deg=tuple(float(th[i]) for i in fit.left_out))
 
 
 def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
