@@ -149,3 +149,26 @@ def test_tilt_beyond_stated_bound_is_a_finding(sim, tmp_path):
     assert "beyond the stated tilt bound 0.02°" in html
     assert main(["calibrate", str(low), "--out", str(tmp_path / "oz"), "--lang", "zh"]) == 0
     assert "超出所声明的倾斜限值 0.02°" in (tmp_path / "oz" / "certificate.html").read_text()
+
+
+def test_the_tilt_estimate_keeps_the_files_rounds_and_marks_the_lone_rest(sim, tmp_path, capsys):
+    """``gonio tilt-estimate --json`` on a file with one rest removed: the positions keep the
+    file's round numbers (the removed one missing, none renumbered), the removed rest's
+    partner is marked out of the fit, and the text output names it."""
+    rows = tilt_rows(sim)
+    line, fields = rows[3]
+    text = sim.read_text().splitlines(keepends=True)
+    del text[line - 1]
+    src = tmp_path / "cut.csv"
+    src.write_text("".join(text))
+    assert main(["tilt-estimate", str(src), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    gone, theta = int(fields[2]), float(fields[6])
+    rounds = [p["round"] for p in d["positions"]]
+    assert gone not in rounds and sorted(rounds) == sorted(int(p[2]) for _, p in rows
+                                                           if int(p[2]) != gone)
+    out = [p["table_deg"] for p in d["positions"] if not p["in_fit"]]
+    assert out == d["left_out_deg"] == [(theta + 180.0) % 360.0]
+    assert (d["basis"], d["dof"]) == ("opposite pairs", 3)
+    assert main(["tilt-estimate", str(src)]) == 0
+    assert "left out of the fit (opposite partner missing)" in capsys.readouterr().out

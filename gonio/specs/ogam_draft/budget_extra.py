@@ -370,8 +370,9 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
     sfi = protocol.scale_factor
     if sfi is None or len(scale_factor_rows) == 0:
         raise GonioError("the tilt correction of K needs the 7.1 rounds")
-    fit = fit_first_harmonic(estimate.table["table_deg"].to_numpy(dtype=float),
-                             estimate.table["rate_arcsec_s"].to_numpy(dtype=float))
+    fit = estimate.fit if estimate.fit is not None else fit_first_harmonic(
+        estimate.table["table_deg"].to_numpy(dtype=float),
+        estimate.table["rate_arcsec_s"].to_numpy(dtype=float))
     _, fa, fb = fit.coef
     amp = math.hypot(fa, fb)
     if not amp > 0:

@@ -274,7 +274,10 @@ def run_tilt_estimate(args) -> int:
     print(f"in-situ tilt estimate: {e.n_positions} positions, axis {e.orientation}, "
           f"latitude {e.latitude_deg:g}°, Ω_⊥ = {e.perpendicular_arcsec_s:.4f}″/s")
     print(f"first harmonic {e.amplitude_arcsec_s:.5f}″/s (u {e.u_amplitude_arcsec_s:.5f}), "
-          f"residual s = {e.residual_sd_arcsec_s:.5f}″/s, ν = {e.dof}")
+          f"residual s = {e.residual_sd_arcsec_s:.5f}″/s, ν = {e.dof} ({e.basis})")
+    if e.left_out_deg:
+        print("left out of the fit (opposite partner missing): "
+              + ", ".join(f"{x:g}°" for x in e.left_out_deg))
     print(f"tilt ψ = {e.tilt_deg:.4f}°, u(ψ) = {e.u_tilt_deg:.4f}° "
           f"(U95 = {e.k95 * e.u_tilt_deg:.4f}°, k = {e.k95:.2f})")
     print(f"tilt azimuth relative to Ω_⊥ at table 0°: {e.phase_deg:.2f}°, u = {e.u_phase_deg:.2f}°")

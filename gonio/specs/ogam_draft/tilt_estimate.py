@@ -201,18 +201,21 @@ class TiltEstimate:
     basis: str = BASIS_RESIDUALS        # how u was found (fit_first_harmonic)
     #: table positions of the rests left out of the fit (outside a complete opposite pair)
     left_out_deg: tuple[float, ...] = ()
+    #: the first-harmonic fit ψ and α come from (its covariance: K's correction takes it)
+    fit: HarmonicFit | None = field(repr=False, default=None)
 
     def to_dict(self) -> dict:
         """Plain dict (for ``--json``)."""
-        d = {k: v for k, v in self.__dict__.items() if k != "table"}
+        d = {k: v for k, v in self.__dict__.items() if k not in ("table", "fit")}
         d["U95_tilt_deg"] = self.k95 * self.u_tilt_deg
-        d["positions"] = [{k: (float(v) if isinstance(v, (float, np.floating)) else int(v))
+        d["positions"] = [{k: (bool(v) if isinstance(v, (bool, np.bool_)) else
+                               float(v) if isinstance(v, (float, np.floating)) else int(v))
                            for k, v in r.items()} for r in self.table.to_dict("records")]
         return d
 
 
 def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: str = "up",
-                  u_latitude_deg: float = 0.0) -> TiltEstimate:
+                  u_latitude_deg: float = 0.0, rounds=None) -> TiltEstimate:
     """ψ and α with standard uncertainties from mean rates at rest positions.
 
     Parameters
@@ -226,6 +229,9 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
         Site latitude and table-axis direction; they give Ω_⊥ and its direction β.
     u_latitude_deg : float
         Standard uncertainty of the latitude (enters through Ω_⊥).
+    rounds : array, optional
+        The rests' round numbers as the readings give them (the table's ``round``; default
+        1…N): a rest set aside keeps its neighbours' numbers.
 
     Returns
     -------
@@ -279,9 +285,13 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
     beta = _perp_direction_rad(latitude_deg, orientation)
     from scipy.stats import t as student_t
 
-    table = pd.DataFrame({"round": np.arange(1, th.size + 1), "table_deg": th,
+    in_fit = np.ones(th.size, dtype=bool)
+    in_fit[list(fit.left_out)] = False
+    table = pd.DataFrame({"round": (np.arange(1, th.size + 1) if rounds is None
+                                    else np.asarray(rounds, dtype=int)), "table_deg": th,
                           "rate_arcsec_s": np.asarray(rate_arcsec_s, dtype=float),
-                          "fitted_arcsec_s": fit.fitted, "residual_arcsec_s": fit.residuals})
+                          "fitted_arcsec_s": fit.fitted, "residual_arcsec_s": fit.residuals,
+                          "in_fit": in_fit})
     return TiltEstimate(
         orientation=orientation, latitude_deg=float(latitude_deg), n_positions=int(th.size),
         perpendicular_arcsec_s=perp, offset_arcsec_s=float(c0), amplitude_arcsec_s=amp,
@@ -290,7 +300,7 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
         tilt_azimuth_table_deg=(math.degrees(gamma + beta) + 180.0) % 360.0 - 180.0,
         dof=fit.dof, k95=float(student_t.ppf(0.975, fit.dof)),
         residual_sd_arcsec_s=fit.residual_sd, table=table, basis=fit.basis,
-        left_out_deg=tuple(float(th[i]) for i in fit.left_out))
+        left_out_deg=tuple(float(th[i]) for i in fit.left_out), fit=fit)
 
 
 def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
@@ -365,4 +375,4 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
         gdeg = np.where(np.isnan(gdeg), counts / k, gdeg)
     rate = gdeg / t * ARCSEC_PER_DEG
     return estimate_tilt(rows["table_deg"].to_numpy(dtype=float), rate, float(latitude_deg),
-                         str(orients[0]), u_latitude_deg)
+                         str(orients[0]), u_latitude_deg, rows["round"].to_numpy(dtype=int))
