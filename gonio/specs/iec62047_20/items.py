@@ -2534,9 +2534,11 @@ def _symmetric_root(C: np.ndarray) -> np.ndarray:
     Why not V √Λ (the eigenvectors scaled): its columns are whatever basis ``eigh`` returns,
     and where eigenvalues nearly coincide a change of C in its ninth digit turns that basis,
     so the same normal numbers give other draws — the Monte Carlo's replicates are then no
-    longer common random numbers across two nearly equal inputs (a 1 ns change of the times
-    moved 5.3.3.5's interval ends by 0.6 of their numerical u). S is unique and continuous
-    in C: the same numbers give nearly the same draws.
+    longer common random numbers across two nearly equal inputs: a 1 ns change of the times
+    moved 5.3.3.5's U by 4.7 %, and ν_eff's shares (central differences that scale one noise
+    variance, which turns the basis) were differences of unrelated draws
+    (docs/formats.md, "watermark"). S is unique and continuous in C: the same numbers give
+    nearly the same draws.
 
     >>> C = np.array([[2.0, 1e-12], [1e-12, 2.0 + 1e-13]])
     >>> S, S2 = _symmetric_root(C), _symmetric_root(C + 1e-12 * np.eye(2)[::-1])
