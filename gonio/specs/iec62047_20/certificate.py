@@ -43,12 +43,14 @@ def _p_value_text(p: float, level: float) -> str:
     >>> _p_value_text(0.0496, 0.05), _p_value_text(0.63, 0.05), _p_value_text(0.04999, 0.05)
     ('0.0496', '0.63', '0.0499')
     >>> _p_value_text(0.05, 0.05), _p_value_text(0.0012345, 0.05), _p_value_text(0.0499999999, 0.05)
-    ('0.05', '0.0012', '0.0499')
+    ('0.050', '0.0012', '0.0499')
+    >>> _p_value_text(0.1004, 0.05)          # two significant digits, the trailing zero kept
+    '0.10'
     """
     from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 
     below = p < level
-    text = f"{p:.2g}"
+    text = f"{p:#.2g}"
     for digits in range(2, 8):
         if (float(text) < level) == below:
             return text
