@@ -1569,7 +1569,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
     (0.01389, 0.01377, [133.49, 143.96])
     """
-    from uncertainty.stdev import corrected_range, range_belt_numerical_u
+    from uncertainty.stdev import corrected_range
 
     if table_reading not in TABLE_READINGS:
         raise ValueError(f"table_reading must be one of {', '.join(TABLE_READINGS)}")
@@ -1606,19 +1606,15 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                  f"the errors alone {c.noise_range:.4g} %, corrected "
                                  f"{c.value:.4g} %"),
                    "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")]
-    lo, hi = c.interval
-    if table_reading == "stated":
-        # every table within its MPE moves the range by at most ``bound`` draw by draw, so
-        # the noise belt at the measured range −/+ it holds K_l for every such table (≥ 95 %)
+    lo, hi, shift = *c.interval, (bound if table_reading == "stated" else 0.0)
+    if table_reading == "stated":   # a table within its MPE moves r by ≤ bound: belt at r ∓ it
         lo, hi = shifted_belt(k_i * to_pct, errs[table_reading], bound)
-        num_u = shifted_belt_numerical_u(k_i * to_pct, errs[table_reading], bound)
         lines.append(_range_table_line(bound, c.interval, worst))
-    else:
-        num_u = max(range_belt_numerical_u(k_i * to_pct, errs[table_reading]))
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
-                   interval_numerical_u=num_u)
+                   interval_numerical_u=shifted_belt_numerical_u(k_i * to_pct,
+                                                                 errs[table_reading], shift))
 
 
 def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibration, *,
