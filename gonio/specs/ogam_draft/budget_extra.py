@@ -365,14 +365,10 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
     >>> bool(abs(c.delta_rel - A / 3600) < 1e-12 * A), c.u_delta_rel < 1e-15, c.dof
     (True, True, 9)
     """
-    from gonio.specs.ogam_draft.tilt_estimate import fit_first_harmonic
-
     sfi = protocol.scale_factor
     if sfi is None or len(scale_factor_rows) == 0:
         raise GonioError("the tilt correction of K needs the 7.1 rounds")
-    fit = estimate.fit if estimate.fit is not None else fit_first_harmonic(
-        estimate.table["table_deg"].to_numpy(dtype=float),
-        estimate.table["rate_arcsec_s"].to_numpy(dtype=float))
+    fit = estimate.fit                      # the fit ψ and α come from, its covariance
     _, fa, fb = fit.coef
     amp = math.hypot(fa, fb)
     if not amp > 0:
