@@ -74,7 +74,7 @@ def test_transient_fits_equal_the_fit_with_a_fresh_pseudo_inverse():
                 assert np.array_equal(m, mw) and r == rw and d == dw
 
 
-def test_wander_draws_equal_a_per_element_variogram_lookup():
+def test_wander_root_equals_a_per_element_variogram_lookup():
     x = np.array([0.0, 0.7, 1.3, 2.0, 5.5, 5.5 + 1e-12, 9.0, 30.0])
     for drift_u in (lambda s: 0.01 * s ** 0.3, lambda s: 1e-3 * math.sqrt(s)):
         lag = np.abs(x[:, None] - x[None, :])
@@ -83,9 +83,8 @@ def test_wander_draws_equal_a_per_element_variogram_lookup():
         Dx = np.array([drift_u(float(s)) ** 2 if s > 0 else 0.0 for s in np.round(x, 9)])
         C = 0.5 * (Dx[:, None] + Dx[None, :] - D)
         # the covariance built element by element, drawn through its symmetric root
-        want = np.random.default_rng(3).standard_normal((40, x.size)) @ I._symmetric_root(C)
-        got = I._wander_draws(np.random.default_rng(3), x, drift_u, 40)
-        assert np.array_equal(got, want)
+        assert np.array_equal(I._wander_root(x, drift_u), I._symmetric_root(C))
+    assert I._wander_root(x, lambda s: 0.0) is None          # no wander: nothing drawn
 
 
 def test_budget_is_the_same_with_the_design_kept():

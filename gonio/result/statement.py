@@ -724,8 +724,7 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
         raise GonioError(f"{where}: a non-negative quantity's interval reaches below zero; "
                          "not stated")
     one_sided = nonnegative and lo == 0
-    gaps = [g for g in ((hi - value,) if one_sided else (value - lo, hi - value)) if g > 0]
-    gap = min(gaps) if gaps else hi - lo
+    gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
     dec = decimals_for_sig(gap, 2)
     if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0:
         # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
@@ -743,6 +742,36 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
         Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff, chi2), p_text(p), unit_s,
                   upper=ht if one_sided else None, exponent=exponent, decimals=dec,
                   interval=(_scaled(lr, exponent, md), ht)), value, nonnegative)
+
+
+def interval_reach(value: float, interval: tuple[float, float], *,
+                   nonnegative: bool = False) -> float:
+    """The distance whose significant digits fix the decimal place of
+    :func:`state_interval`: the nearer end's distance from the value, the upper end's for a
+    non-negative quantity's interval from 0 (a one-sided bound), the width where the value
+    sits on both ends.
+
+    >>> interval_reach(0.1, (0.07, 0.13)), interval_reach(0.01, (0.0, 0.02), nonnegative=True)
+    (0.03, 0.01)
+    """
+    value, lo, hi = float(value), float(interval[0]), float(interval[1])
+    one_sided = nonnegative and lo == 0
+    gaps = [g for g in ((hi - value,) if one_sided else (value - lo, hi - value)) if g > 0]
+    return min(gaps) if gaps else hi - lo
+
+
+def settled_numerical_u(value: float, interval: tuple[float, float], *,
+                        nonnegative: bool = False, ndig: int = 1) -> float:
+    """The largest numerical standard uncertainty of a Monte Carlo interval's ends at which
+    :func:`state_interval` states ``ndig`` significant digits of its reach
+    (:func:`interval_reach`) as computed (JCGM 101 7.9.4: 2·s ≤ δ, δ half a unit of that
+    digit, i.e. s ≤ 10⁻ᵈᵉᶜ/4): the target of an adaptive Monte Carlo.
+
+    >>> settled_numerical_u(0.1, (0.07, 0.13)), settled_numerical_u(0.1, (0.07, 0.13), ndig=2)
+    (0.0025, 0.00025)
+    """
+    gap = interval_reach(value, interval, nonnegative=nonnegative)
+    return 10.0 ** -decimals_for_sig(gap, ndig) / 4.0
 
 
 def numerical_decimals(numerical_u: float) -> int:

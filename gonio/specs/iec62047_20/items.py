@@ -2065,28 +2065,28 @@ def power_on_one_transient(t_obs: float, t_star: np.ndarray,
 
 
 def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.0),
-                         pooled=None, test: bool = False) -> dict:
+                         pooled=None, test: bool = False, blocks=(0,), cache=None) -> dict:
     """The parametric bootstrap of 5.3.3.5 (:func:`power_on_drift_budget`): the records'
     readings, their fitted transient(s) and :data:`POWER_ON_MC_TRIALS` replicates of the
-    fitted records, each read (R*) and fitted (R̂*) as the data are. ``pooled``: one
-    transient for all records (True), one per record (False), or None: one where the
+    fitted records per block of ``blocks`` (block indices), each read (R*) and fitted (R̂*)
+    as the data are; block b draws from :func:`power_on_block_rng` (b), so a block's
+    replicates are the same whichever blocks it is drawn with, and ``cache`` (a dict, or
+    None) keeps each block's normal numbers and replicates for the next call on the same
+    records. ``pooled``:
+    one transient for all records (True), one per record (False), or None: one where the
     records can share it (:func:`power_on_records_pooled`) — the caller decides by
     :func:`power_on_one_transient`, for which ``test`` (with one transient) adds the
-    likelihood ratio of the records ("lr") and of each replicate ("lr_star"). ``scale``
-    multiplies the three noise variances (white σ_y², walk K², flicker B²; the wander of
-    ``drift_u`` by the second) with the same random numbers: the sensitivities of u_c² for
-    its degrees of freedom."""
+    likelihood ratio of the records ("lr") and of each replicate of the first block listed
+    ("lr_star"). ``scale`` multiplies the three noise variances (white σ_y², walk K²,
+    flicker B²; the wander of ``drift_u`` by the second) with the same random numbers: the
+    sensitivities of u_c² for its degrees of freedom."""
     P = max(recs[0][2].size // max(recs[0][1].size, 1), 1)
-    rng = np.random.default_rng(POWER_ON_MC_SEED)
-    n_mc = POWER_ON_MC_TRIALS
     sw, sk, sb = (float(x) for x in scale)
     pooled = power_on_records_pooled(recs) if pooled is None else bool(pooled)
     test = test and pooled
-    stars = []
     vals, dists, sig, designs = [], [], [], []
     for tt, ys, y in recs:
-        ref = float(y[:nr].mean())
-        d = np.abs(ys - ref)
+        d = np.abs(ys - float(y[:nr].mean()))
         vals.append(float(d.max()))
         dists.append(d)
         sig.append(float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0)
@@ -2096,46 +2096,117 @@ def _power_on_replicates(recs, nr: int, drift_u, drift_coef, scale=(1.0, 1.0, 1.
                                designs[0]) * len(recs)
     else:
         fits = [_transient_fits(ys[None, :], dz)[0] for (_, ys, _), dz in zip(recs, designs)]
-    r_hat = max(f[2] for f in fits)
-    r_star, r_fit = np.zeros(n_mc), np.zeros(n_mc)
-    kept, ys_sum = [], 0.0                  # (replicates less reference, fitted transient)
-    for (tt, ys, y), s_y, (mb, mr, _), dz in zip(recs, sig, fits, designs):
-        nb = ys.size
-        white = rng.standard_normal((n_mc, nb * P)) * (s_y * math.sqrt(sw))
-        ys_star = mb[None, :] + white.reshape(n_mc, nb, P).mean(2)
-        ref_star = mr + white[:, :nr].mean(1)
-        if drift_coef is not None:
-            ys_star += _drift_draws(rng, nb, P, nr, float(tt[1] - tt[0]) / P if nb > 1 else 1.0,
-                                    (drift_coef[0] * sk, drift_coef[1] * sb), n_mc)
-        else:
-            w = _wander_draws(rng, tt - tt[0], lambda s: math.sqrt(sk) * drift_u(s), n_mc)
+    cache = {} if cache is None else cache
+    noise = cache.setdefault("noise", {})
+    roots, parts = None, []
+    for b in blocks:
+        key = (sw, sk, sb, pooled, int(b))
+        want_lr = test and b == blocks[0]
+        if key not in cache or (want_lr and "lr" not in cache[key]):
+            if roots is None:
+                roots = [_drift_root(ys.size, P, nr, float(tt[1] - tt[0]) / P
+                                     if ys.size > 1 else 1.0,
+                                     (drift_coef[0] * sk, drift_coef[1] * sb))
+                         if drift_coef is not None else
+                         _wander_root(tt - tt[0], lambda x: math.sqrt(sk) * drift_u(x))
+                         for tt, ys, _ in recs]
+            cache[key] = _power_on_block(recs, nr, drift_coef is None, P, sw, pooled, sig,
+                                         fits, designs, roots, int(b), want_lr, noise)
+        parts.append(cache[key])
+    out = {k: parts[0][k] for k in ("lr", "lr_star")} if test else {}
+    kept = [(np.concatenate([pt["devs"][j] for pt in parts]), mb - mr)
+            for j, (mb, mr, _) in enumerate(fits)]
+    return {"vals": vals, "dists": dists, "sig": sig, "P": P, "pooled": pooled,
+            "r_hat": max(f[2] for f in fits),
+            "r_star": np.concatenate([pt["r_star"] for pt in parts]),
+            "r_fit": np.concatenate([pt["r_fit"] for pt in parts]),
+            "kept": kept, "n_mc": POWER_ON_MC_TRIALS * len(blocks),
+            "white_dof": float(sum(max(y.size - 2, 1) for _, _, y in recs))
+            / SECOND_DIFFERENCE_RHO2, **out}
+
+
+def _power_on_block(recs, nr: int, wander: bool, P: int, sw: float, pooled: bool, sig, fits,
+                    designs, roots, block: int, test: bool, noise: dict) -> dict:
+    """One block of :func:`_power_on_replicates`: :data:`POWER_ON_MC_TRIALS` replicates of
+    the fitted records (``fits``) with white noise σ_y = ``sig`` (variance × ``sw``) and the
+    drift drawn through ``roots`` (the first values' wander in the reference where
+    ``wander``), from the block's standard normal numbers (:func:`_power_on_block_noise`,
+    kept in ``noise`` by block: every scale of the variances uses the same numbers); their
+    readings R* ("r_star"), fitted readings R̂* ("r_fit"), each record's replicates less
+    their reference ("devs"), and with ``test`` the likelihood ratios (:func:`_power_on_lr`)."""
+    n_mc = POWER_ON_MC_TRIALS
+    if block not in noise:
+        noise[block] = _power_on_block_noise(recs, nr, P, [r is not None for r in roots], block)
+    rs, rf, ys_sum, stars, devs = np.zeros(n_mc), np.zeros(n_mc), 0.0, [], []
+    for (tt, ys, y), s_y, (mb, mr, _), dz, root, (wb, wr, z) in zip(
+            recs, sig, fits, designs, roots, noise[block]):
+        f = s_y * math.sqrt(sw)
+        ys_star = mb[None, :] + f * wb
+        ref_star = mr + f * wr
+        if root is not None:
+            w = z @ root
             ys_star += w
-            ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
+            if wander:                          # the wander's reference: its first values
+                ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
         dev = ys_star - ref_star[:, None]
-        r_star = np.maximum(r_star, np.abs(dev).max(1))
-        kept.append((dev, mb - mr))
+        rs = np.maximum(rs, np.abs(dev).max(1))
+        devs.append(dev)
         if pooled:
             ys_sum = ys_sum + ys_star
             if test:
                 stars.append(ys_star)
         else:
-            r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, dz)]))
-    out = {}
+            rf = np.maximum(rf, np.array([f[2] for f in _transient_fits(ys_star, dz)]))
+    out = {"r_star": rs, "r_fit": rf, "devs": devs}
     if pooled:
         pf = _transient_fits(ys_sum / len(recs), designs[0])
-        r_fit = np.array([f[2] for f in pf])
-    if test:
-        own = [_transient_fits(ys[None, :], dz)[0][0] for (_, ys, _), dz in zip(recs, designs)]
-        out["lr"] = float(power_on_lr_statistic(np.array([ys for _, ys, _ in recs]),
-                                                fits[0][0], np.array(own)))
-        Ys = np.stack(stars, axis=1)                                  # (n_mc, records, blocks)
-        own_star = np.stack([np.array([f[0] for f in _transient_fits(Ys[:, j], designs[j])])
-                             for j in range(len(recs))], axis=1)
-        out["lr_star"] = power_on_lr_statistic(Ys, np.array([f[0] for f in pf]), own_star)
-    return {"vals": vals, "dists": dists, "sig": sig, "P": P, "pooled": pooled,
-            "r_hat": r_hat, "r_star": r_star, "r_fit": r_fit, "kept": kept,
-            "white_dof": float(sum(max(y.size - 2, 1) for _, _, y in recs))
-            / SECOND_DIFFERENCE_RHO2, **out}
+        out["r_fit"] = np.array([f[2] for f in pf])
+        if test:
+            out.update(_power_on_lr(recs, designs, fits, pf, stars))
+    return out
+
+
+def _power_on_block_noise(recs, nr: int, P: int, drift, block: int) -> list:
+    """The standard normal numbers of one block of 5.3.3.5's replicates
+    (:func:`power_on_block_rng` (``block``)), per record in order: the white samples' block
+    means (replicates × smoothed values) and reference means, then, where ``drift`` (per
+    record) says a drift is drawn, the drift's normal rows (replicates × smoothed values, None
+    otherwise)."""
+    n_mc = POWER_ON_MC_TRIALS
+    rng = power_on_block_rng(block)
+    out = []
+    for (_, ys, _), d in zip(recs, drift):
+        nb = ys.size
+        white = rng.standard_normal((n_mc, nb * P))
+        out.append((white.reshape(n_mc, nb, P).mean(2), white[:, :nr].mean(1),
+                    rng.standard_normal((n_mc, nb)) if d else None))
+    return out
+
+
+def _power_on_lr(recs, designs, fits, pf, stars) -> dict:
+    """The likelihood ratio of the records against one transient ("lr") and of each
+    replicate ("lr_star", from its own fits ``pf`` and the replicates ``stars``, one array
+    per record) for :func:`power_on_one_transient`."""
+    own = [_transient_fits(ys[None, :], dz)[0][0] for (_, ys, _), dz in zip(recs, designs)]
+    lr = float(power_on_lr_statistic(np.array([ys for _, ys, _ in recs]), fits[0][0],
+                                     np.array(own)))
+    Ys = np.stack(stars, axis=1)                                      # (n_mc, records, blocks)
+    own_star = np.stack([np.array([f[0] for f in _transient_fits(Ys[:, j], designs[j])])
+                         for j in range(len(recs))], axis=1)
+    return {"lr": lr, "lr_star": power_on_lr_statistic(Ys, np.array([f[0] for f in pf]),
+                                                       own_star)}
+
+
+def power_on_block_rng(block: int) -> np.random.Generator:
+    """The random numbers of block ``block`` of 5.3.3.5's replicates: the first from
+    :data:`POWER_ON_MC_SEED` alone, block b > 0 from the seed sequence (seed, b) —
+    independent streams, fixed, so the same records give the same value and more blocks
+    add replicates without changing the first ones.
+
+    >>> float(power_on_block_rng(0).random()) == float(np.random.default_rng(POWER_ON_MC_SEED).random())
+    True
+    """
+    return np.random.default_rng(POWER_ON_MC_SEED if block == 0 else [POWER_ON_MC_SEED, block])
 
 
 #: Σ ρ_k² of white noise's second differences (ρ₁ = −2/3, ρ₂ = 1/6): σ_y² from m second
@@ -2180,8 +2251,8 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     (:func:`_power_on_replicates`): one transient c_i + A·e^(−t/τ) fitted to the records
     together (:func:`power_on_records_pooled`; one by one where their timing differs;
     :func:`_transient_fits`: least squares on the smoothed values, τ on a grid, A = 0
-    included), giving R̂, the reading of the fitted records; :data:`POWER_ON_MC_TRIALS`
-    seeded replicates of the fitted records are drawn with the record's noise — white
+    included), giving R̂, the reading of the fitted records; blocks of
+    :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records are drawn with the record's noise — white
     samples of σ_y = √(var Δ²y/6) (second differences: a transient smooth on the sample
     interval does not enter them) and the bias drift — with ``drift_coef`` = (K² (°/s)²/s,
     B² (°/s)²) from the static record (:func:`drift_coef_power_on_dps`) the exact covariance of the smoothed values less the
@@ -2209,11 +2280,119 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     carries the noise estimates' own uncertainty, as t does in the GUM), not value ± U: a
     drift is non-negative, and V's distribution is skewed near 0. The contenders (details)
     are the smoothed values within 2√2·σ of the largest (σ of one smoothed value less the
-    reference)."""
-    rep = _power_on_replicates(recs, nr, drift_u, drift_coef, test=True)
-    fit = power_on_fit_decision(recs, rep)
-    if rep["pooled"] and not fit["transient_one"]:
-        rep = _power_on_replicates(recs, nr, drift_u, drift_coef, pooled=False)
+    reference).
+
+    The number of replicates is JCGM 101 7.9's adaptive procedure (:func:`power_on_adaptive`):
+    one block of :data:`POWER_ON_MC_TRIALS`, then as many blocks as the interval's ends need
+    to be settled at the digit stated, up to :data:`POWER_ON_MC_MAX_BLOCKS`; the fitting
+    decision (one transient or one per record) is the first block's."""
+    cache: dict = {}                     # each block's replicates, drawn once
+    first = _power_on_budget_at(recs, nr, drift_u, drift_coef, coef_dof, (0,), cache=cache)
+    return power_on_adaptive(
+        first, lambda blocks: _power_on_budget_at(recs, nr, drift_u, drift_coef, coef_dof,
+                                                  blocks, first[4], cache))
+
+
+def power_on_adaptive(first, evaluate):
+    """JCGM 101 7.9.4's adaptive Monte Carlo for 5.3.3.5, reading taken. ``first``: the
+    budget (value, readings, Uncertainty, contenders, fit) from block 0 alone;
+    ``evaluate`` (block indices → the same from those blocks). Where block 0's ends are not
+    settled at the digit stated (:func:`power_on_blocks_needed` on its quantiles' numerical
+    u), blocks 1, 2, … are evaluated one by one, each a whole budget on its own
+    replicates, until :func:`power_on_block_numerical_u` of the h block results is settled
+    at their mean, or h reaches :data:`POWER_ON_MC_MAX_BLOCKS`; the result is then the
+    budget on all h·:data:`POWER_ON_MC_TRIALS` replicates together (7.9.4 e), its ends'
+    numerical u that of the blocks (every numerical source in it: the quantiles, the
+    excess, the slope g, ν_eff's shares)."""
+    results = [first]
+    while True:
+        h = len(results)
+        s = power_on_block_numerical_u([r[2].interval for r in results],
+                                       [r[2].interval_numerical_u for r in results])
+        value = float(np.mean([r[0] for r in results]))
+        ends = tuple(np.mean([r[2].interval for r in results], axis=0))
+        more = power_on_blocks_needed(value, ends, s, h)
+        if more <= h:
+            break
+        results += [evaluate((b,)) for b in range(h, more)]
+    if h == 1:
+        return first
+    out = evaluate(tuple(range(h)))
+    return (*out[:2], replace(out[2], interval_numerical_u=s), *out[3:])
+
+
+def power_on_block_numerical_u(ends, quantile_u) -> float:
+    """The numerical standard uncertainty of 5.3.3.5's interval ends from h blocks of
+    replicates evaluated one by one (JCGM 101 7.9.4 c: the standard deviation of the h
+    block results over √h), the larger end's; never below the blocks' own quantile
+    estimates ``quantile_u`` (:func:`power_on_interval_numerical_u`, their rms over √h),
+    which a few blocks' standard deviation can miss by chance. ``ends``: each block's
+    (lower, upper).
+
+    >>> round(power_on_block_numerical_u([(1.0, 2.0)], [0.1]), 6)
+    0.1
+    >>> round(power_on_block_numerical_u([(1.0, 2.0), (1.2, 2.0), (1.1, 2.1)], [0.01] * 3), 6)
+    0.057735
+    """
+    e = np.asarray(ends, float)
+    h = e.shape[0]
+    sd = float(e.std(axis=0, ddof=1).max()) if h > 1 else 0.0
+    q = float(np.sqrt(np.mean(np.square(np.asarray(quantile_u, float)))))
+    return max(sd, q) / math.sqrt(h)
+
+
+def power_on_blocks_needed(value: float, interval, numerical_u, blocks: int) -> int:
+    """JCGM 101 7.9's adaptive Monte Carlo for 5.3.3.5, reading taken: the number of blocks
+    of :data:`POWER_ON_MC_TRIALS` replicates the statement needs, given the value, its
+    ``interval`` and the ends' ``numerical_u`` from ``blocks`` of them. The interval is stated at two significant
+    digits of its reach where the replicates settle them, at one at least
+    (:func:`gonio.result.statement.state_interval`); one digit is settled where the ends'
+    numerical standard uncertainty s (``numerical_u``) meets 2·s ≤ δ, δ half a
+    unit of that digit (:func:`gonio.result.statement.settled_numerical_u`). Where it does
+    not, the count grows as s² falls, 1/M: blocks × (s/s_settled)² × 1.5 (a margin for s's
+    own scatter), at least one block more, at most :data:`POWER_ON_MC_MAX_BLOCKS`. Returns
+    ``blocks`` where the digit is settled or the cap reached (the interval is then stated
+    with its numerical u, and the statement rule keeps one digit).
+
+    >>> power_on_blocks_needed(0.1, (0.07, 0.13), 0.003, 1)    # one digit at 0.01: s ≤ 0.0025
+    3
+    >>> power_on_blocks_needed(0.1, (0.07, 0.13), 0.002, 1), power_on_blocks_needed(0.1, (0.07, 0.13), 0.02, 1)
+    (1, 16)
+    """
+    from gonio.result.statement import settled_numerical_u
+
+    s = numerical_u
+    if blocks >= POWER_ON_MC_MAX_BLOCKS or s is None or not s > 0 or interval is None:
+        return blocks
+    target = settled_numerical_u(value, interval, nonnegative=True, ndig=1)
+    if s <= target:
+        return blocks
+    return min(POWER_ON_MC_MAX_BLOCKS,
+               max(blocks + 1, math.ceil(blocks * 1.5 * (s / target) ** 2)))
+
+
+#: The most blocks of :data:`POWER_ON_MC_TRIALS` replicates 5.3.3.5 draws (6400 replicates,
+#: about 4 s on one core): the ends' numerical u falls as 1/√M, so the cap is reached only
+#: where 400 replicates leave s four times the settled value.
+POWER_ON_MC_MAX_BLOCKS = 16
+
+
+def _power_on_budget_at(recs, nr: int, drift_u, drift_coef, coef_dof, blocks, fit=None,
+                        cache=None):
+    """:func:`power_on_drift_budget` from the replicates of ``blocks`` (block indices,
+    ``cache`` as :func:`_power_on_replicates`); the fitting decision ``fit``
+    (:func:`power_on_fit_decision`) made here where None, else taken as given (the first
+    block's, for the blocks that follow it)."""
+    if fit is None:
+        rep = _power_on_replicates(recs, nr, drift_u, drift_coef, test=True, blocks=blocks,
+                                   cache=cache)
+        fit = power_on_fit_decision(recs, rep)
+        if rep["pooled"] and not fit["transient_one"]:
+            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, pooled=False,
+                                       blocks=blocks, cache=cache)
+    else:
+        rep = _power_on_replicates(recs, nr, drift_u, drift_coef,
+                                   pooled=fit["transient_one"], blocks=blocks, cache=cache)
     vals, r_hat, r_star, r_fit = rep["vals"], rep["r_hat"], rep["r_star"], rep["r_fit"]
     excess = float(r_star.mean() - r_hat)
     r_at = r_hat - float(r_fit.mean() - r_hat)
@@ -2222,13 +2401,14 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     v_star = r_star - excess - g * (r_fit - r_hat)
     resid = float(v_star.mean() - r_hat)
     u_v = float(v_star.std(ddof=1))
-    shares = _power_on_shares(recs, nr, drift_u, drift_coef, g, u_v, rep["pooled"])
-    nu = power_on_dof(shares, [rep["white_dof"], *coef_dof], POWER_ON_MC_TRIALS)
+    shares = _power_on_shares(recs, nr, drift_u, drift_coef, g, u_v, rep["pooled"], blocks,
+                              cache)
+    nu = power_on_dof(shares, [rep["white_dof"], *coef_dof], rep["n_mc"])
     i = int(np.argmax(vals))
     sd_i = rep["sig"][i] * math.sqrt(1.0 / rep["P"] + 1.0 / nr)
     cont = np.concatenate(rep["dists"])
     m_sel = int(np.sum(cont >= cont.max() - 2 * math.sqrt(2) * sd_i))
-    src = (f"{POWER_ON_MC_TRIALS} seeded replicates of the fitted records (c + A·e^(−t/τ)"
+    src = (f"{rep['n_mc']} seeded replicates of the fitted records (c + A·e^(−t/τ)"
            f"{', one transient for all records' if rep['pooled'] else ''}, white noise σ_y, "
            "bias drift from the Allan fit)")
     u = gum(lambda v, e, b: v - e - b,
@@ -2282,11 +2462,11 @@ POWER_ON_SHARE_STEP = 0.2
 
 
 def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float,
-                     pooled=None) -> list:
+                     pooled=None, blocks=(0,), cache=None) -> list:
     """s_i = ∂ln u_c²/∂ln v_i of 5.3.3.5's u_c² = var(R* − g·R̂*) for the white, walk and
     flicker variances (in that order), by a central difference of ± :data:`POWER_ON_SHARE_STEP`
-    with the same random numbers (:func:`_power_on_replicates`'s ``scale``); 0 for a
-    variance that is 0."""
+    with the same random numbers (:func:`_power_on_replicates`'s ``scale``, the same
+    ``blocks``); 0 for a variance that is 0."""
     if not u_v > 0:
         return [0.0, 0.0, 0.0]
     span = float(recs[0][0][-1] - recs[0][0][0]) if recs[0][0].size > 1 else 0.0
@@ -2300,7 +2480,8 @@ def _power_on_shares(recs, nr: int, drift_u, drift_coef, g: float, u_v: float,
         for f in (1.0 + POWER_ON_SHARE_STEP, 1.0 - POWER_ON_SHARE_STEP):
             sc = [1.0, 1.0, 1.0]
             sc[j] = f
-            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, sc, pooled)
+            rep = _power_on_replicates(recs, nr, drift_u, drift_coef, sc, pooled,
+                                       blocks=blocks, cache=cache)
             var.append(float(np.var(rep["r_star"] - g * rep["r_fit"], ddof=1)))
         out.append((var[0] - var[1]) / (2.0 * POWER_ON_SHARE_STEP * u_v ** 2))
     return out
@@ -2502,18 +2683,19 @@ def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, floa
     return out
 
 
-def _drift_draws(rng, nb: int, P: int, nr: int, dt: float, coef, n_mc: int) -> np.ndarray:
-    """``n_mc`` draws of the ``nb`` smoothed values (``P`` samples of ``dt`` s each) less the
+def _drift_root(nb: int, P: int, nr: int, dt: float, coef):
+    """The draws of the ``nb`` smoothed values (``P`` samples of ``dt`` s each) less the
     mean of the first ``nr`` samples under the rate random walk and flicker of ``coef`` =
-    (E[K²], E[B²]): each is a combination of four angle values, (θ(s+d) − θ(s))/d −
-    (θ(r) − θ(0))/r, whose covariance is Σ c_a c_b G(|t_a − t_b|) with the five-term
-    model's generalised covariance G (:func:`gonio.analysis.noise.covariance.
-    generalised_covariance`)."""
+    (E[K²], E[B²]) are z·S, z standard normal rows, with S this function's return, the
+    symmetric root of their covariance (None where neither noise is present): each value
+    is a combination of four angle values, (θ(s+d) − θ(s))/d − (θ(r) − θ(0))/r, whose
+    covariance is Σ c_a c_b G(|t_a − t_b|) with the five-term model's generalised
+    covariance G (:func:`gonio.analysis.noise.covariance.generalised_covariance`)."""
     from gonio.analysis.noise.covariance import generalised_covariance
 
     k2, b2 = coef
     if k2 <= 0 and b2 <= 0:
-        return np.zeros((n_mc, nb))
+        return None
     d, r = P * dt, nr * dt
     pts = np.concatenate([d * np.arange(nb + 1), [r]])
     M = np.zeros((nb, pts.size))
@@ -2523,8 +2705,7 @@ def _drift_draws(rng, nb: int, P: int, nr: int, dt: float, coef, n_mc: int) -> n
     M[:, -1] -= 1.0 / r
     lag = np.abs(pts[:, None] - pts[None, :]) / dt
     G = generalised_covariance(lag, [0.0, 0.0, b2, k2], dt)
-    C = M @ G @ M.T
-    return rng.standard_normal((n_mc, nb)) @ _symmetric_root(C)
+    return _symmetric_root(M @ G @ M.T)
 
 
 def _symmetric_root(C: np.ndarray) -> np.ndarray:
@@ -2549,19 +2730,18 @@ def _symmetric_root(C: np.ndarray) -> np.ndarray:
     return (V * np.sqrt(np.clip(ev, 0.0, None))) @ V.T
 
 
-def _wander_draws(rng, x: np.ndarray, drift_u, n_mc: int) -> np.ndarray:
-    """``n_mc`` draws at times ``x`` (s from the record's start) of a Gaussian process of
-    stationary increments with variogram D(s) = ``drift_u``(s)², zero at x = 0:
-    cov(w_i, w_j) = ½[D(x_i) + D(x_j) − D(|x_i − x_j|)]."""
+def _wander_root(x: np.ndarray, drift_u):
+    """The symmetric root S of the covariance at times ``x`` (s from the record's start) of
+    a Gaussian process of stationary increments with variogram D(s) = ``drift_u``(s)², zero
+    at x = 0 — cov(w_i, w_j) = ½[D(x_i) + D(x_j) − D(|x_i − x_j|)] — so that z·S, z standard
+    normal rows, are its draws; None where the covariance is zero."""
     lag = np.abs(x[:, None] - x[None, :])
     ul = np.unique(np.round(np.concatenate([lag.ravel(), x]), 9))
     Dm = {float(s): (drift_u(float(s)) ** 2 if s > 0 else 0.0) for s in ul}
     Dx = np.array([Dm[float(s)] for s in np.round(x, 9)])
     Dl = np.array([Dm[float(s)] for s in ul])[np.searchsorted(ul, np.round(lag, 9))]
     C = 0.5 * (Dx[:, None] + Dx[None, :] - Dl)
-    if not np.any(C):
-        return np.zeros((n_mc, x.size))
-    return rng.standard_normal((n_mc, x.size)) @ _symmetric_root(C)
+    return _symmetric_root(C) if np.any(C) else None
 
 
 def startup_time(ctx: Context) -> Item:
