@@ -2300,24 +2300,22 @@ def power_on_adaptive(first, evaluate):
     settled at the digit stated (:func:`power_on_blocks_needed` on its quantiles' numerical
     u), blocks 1, 2, … are evaluated one by one, each a whole budget on its own
     replicates, until :func:`power_on_block_numerical_u` of the h block results is settled
-    at their mean, or h reaches :data:`POWER_ON_MC_MAX_BLOCKS`; the result is then the
-    budget on all h·:data:`POWER_ON_MC_TRIALS` replicates together (7.9.4 e), its ends'
-    numerical u that of the blocks (every numerical source in it: the quantiles, the
-    excess, the slope g, ν_eff's shares)."""
-    results = [first]
+    at the digit of the budget on all h·:data:`POWER_ON_MC_TRIALS` replicates together
+    (7.9.4 e: the result stated), or h reaches :data:`POWER_ON_MC_MAX_BLOCKS`; that budget
+    is returned, its ends' numerical u that of the blocks (every numerical source in it:
+    the quantiles, the excess, the slope g, ν_eff's shares)."""
+    results, out = [first], first
     while True:
         h = len(results)
         s = power_on_block_numerical_u([r[2].interval for r in results],
                                        [r[2].interval_numerical_u for r in results])
-        value = float(np.mean([r[0] for r in results]))
-        ends = tuple(np.mean([r[2].interval for r in results], axis=0))
-        more = power_on_blocks_needed(value, ends, s, h)
+        more = power_on_blocks_needed(out[0], out[2].interval, s, h)
         if more <= h:
             break
         results += [evaluate((b,)) for b in range(h, more)]
+        out = evaluate(tuple(range(more)))     # the blocks' replicates again, not redrawn
     if h == 1:
         return first
-    out = evaluate(tuple(range(h)))
     return (*out[:2], replace(out[2], interval_numerical_u=s), *out[3:])
 
 
