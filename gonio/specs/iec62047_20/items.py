@@ -2252,8 +2252,8 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     together (:func:`power_on_records_pooled`; one by one where their timing differs;
     :func:`_transient_fits`: least squares on the smoothed values, τ on a grid, A = 0
     included), giving R̂, the reading of the fitted records; blocks of
-    :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records are drawn with the record's noise — white
-    samples of σ_y = √(var Δ²y/6) (second differences: a transient smooth on the sample
+    :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records are drawn with the
+    record's noise — white samples of σ_y = √(var Δ²y/6) (second differences: a transient smooth on the sample
     interval does not enter them) and the bias drift — with ``drift_coef`` = (K² (°/s)²/s,
     B² (°/s)²) from the static record (:func:`drift_coef_power_on_dps`) the exact covariance of the smoothed values less the
     reference under the rate random walk and the flicker (the five-term model's generalised
@@ -2342,10 +2342,10 @@ def power_on_block_numerical_u(ends, quantile_u) -> float:
 def power_on_blocks_needed(value: float, interval, numerical_u, blocks: int) -> int:
     """JCGM 101 7.9's adaptive Monte Carlo for 5.3.3.5, reading taken: the number of blocks
     of :data:`POWER_ON_MC_TRIALS` replicates the statement needs, given the value, its
-    ``interval`` and the ends' ``numerical_u`` from ``blocks`` of them. The interval is stated at two significant
-    digits of its reach where the replicates settle them, at one at least
-    (:func:`gonio.result.statement.state_interval`); one digit is settled where the ends'
-    numerical standard uncertainty s (``numerical_u``) meets 2·s ≤ δ, δ half a
+    ``interval`` and the ends' ``numerical_u`` from ``blocks`` of them. The interval is
+    stated at two significant digits of its reach where the replicates settle them, at one
+    at least (:func:`gonio.result.statement.state_interval`); one digit is settled where
+    the ends' numerical standard uncertainty s (``numerical_u``) meets 2·s ≤ δ, δ half a
     unit of that digit (:func:`gonio.result.statement.settled_numerical_u`). Where it does
     not, the count grows as s² falls, 1/M: blocks × (s/s_settled)² × 1.5 (a margin for s's
     own scatter), at least one block more, at most :data:`POWER_ON_MC_MAX_BLOCKS`. Returns
@@ -2369,9 +2369,9 @@ def power_on_blocks_needed(value: float, interval, numerical_u, blocks: int) -> 
                max(blocks + 1, math.ceil(blocks * 1.5 * (s / target) ** 2)))
 
 
-#: The most blocks of :data:`POWER_ON_MC_TRIALS` replicates 5.3.3.5 draws (6400 replicates,
-#: about 4 s on one core): the ends' numerical u falls as 1/√M, so the cap is reached only
-#: where 400 replicates leave s four times the settled value.
+#: The most blocks of :data:`POWER_ON_MC_TRIALS` replicates 5.3.3.5 draws (6400 replicates;
+#: each block costs about what the first does): the ends' numerical u falls as 1/√M, so the
+#: cap is reached only where 400 replicates leave s about three times the settled value.
 POWER_ON_MC_MAX_BLOCKS = 16
 
 
