@@ -2140,9 +2140,9 @@ def _power_on_block(recs, nr: int, wander: bool, P: int, sw: float, pooled: bool
     rs, rf, ys_sum, stars, devs = np.zeros(n_mc), np.zeros(n_mc), 0.0, [], []
     for (tt, ys, y), s_y, (mb, mr, _), dz, root, (wb, wr, z) in zip(
             recs, sig, fits, designs, roots, noise[block]):
-        f = s_y * math.sqrt(sw)
-        ys_star = mb[None, :] + f * wb
-        ref_star = mr + f * wr
+        sd_w = s_y * math.sqrt(sw)
+        ys_star = mb[None, :] + sd_w * wb
+        ref_star = mr + sd_w * wr
         if root is not None:
             w = z @ root
             ys_star += w
