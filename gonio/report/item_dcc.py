@@ -134,8 +134,9 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             below_zero_quantity(d, name, n["interval"]["ends"], dsi, float(p),
                                 description=st.text())
             continue
-        quantity(d, name, n["stated_value"], "", dsi=dsi,
-                 ref_type="basic_measuredValue", **kw)
+        quantity(d, name, n["stated_value"], "", dsi=dsi, ref_type="basic_measuredValue",
+                 description=st.text() if st is not None and st.widened is not None else None,
+                 **kw)
         if bound is not None:
             interval_quantity(d, name, bound, dsi, float(p), bound_interval_text(it))
     for mname, keys in content_field(data, "MATRICES"):

@@ -268,6 +268,8 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                 cell = n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
                 val = ([cell + sep + n["statement"].below_zero_note(lang)]
                        if n["statement"].below_zero else [val, sep + cell])
+                if n["statement"].widened is not None:    # the draws left no digit settled
+                    val[-1] += sep + n["statement"].widened_note(lang)
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
@@ -404,6 +406,11 @@ def dcc_translator(result, content_fn):
     norm = content_field(data, "NORM")
     if norm:
         extra[norm[0]] = norm[1]
+    from gonio.result.statement import item_statement
+    for it in res.get("items", {}).values():    # a description that is the statement itself
+        if it.get("measured") and (it.get("uncertainty") or {}).get("interval_numerical_u"):
+            st = item_statement(it)             # (its ends widened for a Monte Carlo)
+            extra[st.text("en")] = st.text("zh")
     # the guard-band note of the items decided on their interval (conformity_statements)
     from gonio.report.dcc import band_unit
     from gonio.report.stated import interval_band_note

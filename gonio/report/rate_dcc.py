@@ -207,7 +207,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             quantity(data, name, n["stated_value"], "", dsi=dsi,
                      note=f" factor={factor!r}" if conv else "",
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
-                     description=_converted(st, it, key, factor) if conv else None, **kw)
+                     description=(_converted(st, it, key, factor)
+                                  if conv or st.widened is not None else None), **kw)
             if bound is not None:
                 interval_quantity(data, name, bound, dsi, float(item_p(it)),
                                   bound_interval_text(it))
@@ -223,7 +224,7 @@ def _converted(st, it: dict, key: str, factor: float) -> str:
     and where the DCC writes it in another unit than the certificate (a per-g item per
     m s⁻², ``factor`` ≠ 1) the certificate's statement in results.json's unit."""
     if factor == 1.0:
-        return st.text()
+        return st.text()            # with the note of ends widened for the draws, if any
     return (f"{item_nums(it, f'items.{key}')['statement'].text()} in results.json, written "
             f"per m s⁻² (g_n = {STANDARD_GRAVITY_M_S2} m s⁻²)")
 

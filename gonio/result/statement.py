@@ -532,6 +532,11 @@ class Statement:
     decimals: int | None = None
     interval: tuple[str, str] | None = None
     below_zero: bool = False
+    #: the Monte Carlo's numerical widening of the interval's ends (2·s, two significant
+    #: digits rounded up, with the common power of ten), where the draws settle not even
+    #: one digit of its reach (:func:`state_interval`); None: the computed ends, rounded
+    #: outward
+    widened: str | None = None
 
     def _x(self, s: str) -> str:
         return f"{s}×10{str(self.exponent).translate(_SUP)}" if self.exponent else s
@@ -595,6 +600,13 @@ class Statement:
             return f"区间 [{lo}, {hi}]{u}" + (f"（{p}）" if p else "")
         return f"interval [{lo}, {hi}]{u}" + (f" ({p})" if p else "")
 
+    def widened_note(self, lang: str = "en") -> str:
+        """The note beside an interval whose ends :func:`state_interval` moved out by the
+        Monte Carlo's numerical uncertainty (:data:`WIDENED_NOTE`), or ""."""
+        if self.widened is None:
+            return ""
+        return WIDENED_NOTE.get(lang, WIDENED_NOTE["en"]).format(w=self._x(self.widened))
+
     def below_zero_note(self, lang: str = "en") -> str:
         """The note beside the upper bound of a quantity whose estimate fell below zero
         (:func:`below_zero_bound`), or ""."""
@@ -606,11 +618,11 @@ class Statement:
         non-negative quantity whose estimate fell below zero: its upper bound and the note."""
         u = f" {self.unit}" if self.unit else ""
         sep = "；" if lang == "zh" else "; "
+        wide = sep + self.widened_note(lang) if self.widened is not None else ""
         if self.below_zero:
-            return self.interval_text(lang) + sep + self.below_zero_note(lang)
+            return self.interval_text(lang) + sep + self.below_zero_note(lang) + wide
         if self.interval is not None:
-            return f"{self.value_text}{u}" + ("；" if lang == "zh" else "; ") + \
-                self.interval_text(lang)
+            return f"{self.value_text}{u}" + sep + self.interval_text(lang) + wide
         if self.U is None:
             return f"{self.value_text}{u}"
         s = f"{self.value_text} ± {self.U_text}{u}"
@@ -621,6 +633,13 @@ class Statement:
     def to_json(self) -> dict:
         """The fields as a JSON object (all texts; for summary files and checks)."""
         return asdict(self)
+
+
+#: The note beside an interval whose Monte Carlo draws left not even one digit of its reach
+#: settled, so that :func:`state_interval` moved both ends out by twice their numerical
+#: standard uncertainty (``w``, as stated).
+WIDENED_NOTE = {"en": "ends widened by {w} (2·s, Monte Carlo not settled)",
+                "zh": "端点已各向外放宽 {w}（2s，蒙特卡洛未稳定）"}
 
 
 #: The note beside the upper bound of a non-negative quantity whose estimate fell below zero.
@@ -681,7 +700,12 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     to the place that leaves one significant digit in that distance (JCGM 101 7.9.2's ndig
     of 1: the ends rounded outward at a coarser place would widen the interval by more
     than the draws' scatter). A digit a rerun of the Monte Carlo would change is not
-    printed where one digit can be kept.
+    printed where one digit can be kept. Where the draws settle not even that one digit
+    (4·``numerical_u`` above a unit of it: a capped adaptive Monte Carlo), the ends are first
+    moved out by 2·``numerical_u`` (the reach of the draws' scatter at about 95 %; not
+    below 0 for a non-negative quantity) and stated at one digit of the widened reach, so
+    the statement holds the interval an unlimited number of draws would give; ``widened``
+    says by how much, and every output prints that note (:data:`WIDENED_NOTE`).
 
     Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
     holding the value (except a non-negative quantity's estimate below an interval from 0:
@@ -704,8 +728,13 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     '0.100 °/s; interval [0.067, 0.131] °/s (p = 95 %)'
     >>> state_interval(0.0995, (0.0677, 0.1302), p=0.95, unit="°/s", numerical_u=0.002).text()
     '0.10 °/s; interval [0.06, 0.14] °/s (p = 95 %)'
-    >>> state_interval(0.006, (0.0, 0.0191), p=0.95, nonnegative=True, numerical_u=0.004).text()
+    >>> state_interval(0.006, (0.0, 0.0191), p=0.95, nonnegative=True, numerical_u=0.002).text()
     '0.01; upper bound: ≤ 0.02 (interval [0, 0.02], p = 95 %)'
+    >>> s = state_interval(0.0995, (0.0677, 0.1302), p=0.95, unit="°/s", numerical_u=0.006)
+    >>> s.interval, s.widened          # 0.0677 − 0.012, 0.1302 + 0.012: one digit of 0.043
+    (('0.05', '0.15'), '0.012')
+    >>> s.text()
+    '0.10 °/s; interval [0.05, 0.15] °/s (p = 95 %); ends widened by 0.012 (2·s, Monte Carlo not settled)'
     >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
     Traceback (most recent call last):
     gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
@@ -723,12 +752,20 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     if nonnegative and lo < 0:
         raise GonioError(f"{where}: a non-negative quantity's interval reaches below zero; "
                          "not stated")
-    one_sided = nonnegative and lo == 0
     gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
     dec = decimals_for_sig(gap, 2)
+    widen = 0.0
     if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0:
-        # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
-        dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
+        if numerical_decimals(numerical_u) < decimals_for_sig(gap, 1):
+            # not one digit settled: the ends out by the scatter's reach, 2·s
+            widen = 2.0 * float(numerical_u)
+            lo = max(lo - widen, 0.0) if nonnegative else lo - widen
+            hi += widen
+            gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
+            dec = decimals_for_sig(gap, 1)
+        else:   # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
+            dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
+    one_sided = nonnegative and lo == 0
     q = Decimal(1).scaleb(-dec)
     with _wide():
         vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
@@ -738,10 +775,16 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
             if dec > 6 or abs(hr) >= Decimal("1e15") else 0
     md = dec + exponent
     ht = _scaled(hr, exponent, md)
+    wt = None
+    if widen:                           # two significant digits, rounded up
+        dw = decimals_for_sig(widen, 2)
+        with _wide():
+            w = Decimal(repr(widen)).quantize(Decimal(1).scaleb(-dw), rounding=ROUND_CEILING)
+        wt = _scaled(w, exponent, dw + exponent)
     return below_zero_bound(
         Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff, chi2), p_text(p), unit_s,
                   upper=ht if one_sided else None, exponent=exponent, decimals=dec,
-                  interval=(_scaled(lr, exponent, md), ht)), value, nonnegative)
+                  interval=(_scaled(lr, exponent, md), ht), widened=wt), value, nonnegative)
 
 
 def interval_reach(value: float, interval: tuple[float, float], *,

@@ -2350,7 +2350,8 @@ def power_on_blocks_needed(value: float, interval, numerical_u, blocks: int) -> 
     not, the count grows as s² falls, 1/M: blocks × (s/s_settled)² × 1.5 (a margin for s's
     own scatter), at least one block more, at most :data:`POWER_ON_MC_MAX_BLOCKS`. Returns
     ``blocks`` where the digit is settled or the cap reached (the interval is then stated
-    with its numerical u, and the statement rule keeps one digit).
+    with its numerical u; where even one digit is then unsettled the statement rule widens
+    the ends by 2·s and says so).
 
     >>> power_on_blocks_needed(0.1, (0.07, 0.13), 0.003, 1)    # one digit at 0.01: s ≤ 0.0025
     3

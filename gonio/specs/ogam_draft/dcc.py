@@ -260,15 +260,20 @@ def _e_max_position(res: dict) -> str:
 def _range_table_text(res: dict, name: str, L: dict) -> str | None:
     """K_l's, C_v's or C_g's description when a calibrated table corrected its readings: the
     certificate's note and the calibration file's SHA-256 (results.json
-    ``details.table_calibration``), in ``L``'s language; None otherwise."""
-    note = range_table_note(res, name, L)
-    if not note:
-        return None
-    d = res["items"][name]["details"]["table_calibration"]
-    sha = _SHA[_lang(L)].format(sha=d["sha256"]) if d.get("sha256") else ""
-    sym = {"scale_factor_nonlinearity": "K_l", "rate_consistency": "C_v",
-           "pointing_consistency": "C_g"}[name]
-    return f"{sym} " + "".join(str(x) for x in note) + sha
+    ``details.table_calibration``); and where the statement rule widened the interval's ends
+    for a Monte Carlo not settled, its note (``Statement.widened_note``); in ``L``'s
+    language; None where neither applies."""
+    parts, note = [], range_table_note(res, name, L)
+    if note:
+        d = res["items"][name]["details"]["table_calibration"]
+        sha = _SHA[_lang(L)].format(sha=d["sha256"]) if d.get("sha256") else ""
+        sym = {"scale_factor_nonlinearity": "K_l", "rate_consistency": "C_v",
+               "pointing_consistency": "C_g"}[name]
+        parts.append(f"{sym} " + "".join(str(x) for x in note) + sha)
+    iv = stated_item(res, name).get("interval") if res["items"][name]["measured"] else None
+    if iv is not None and iv["statement"].widened is not None:
+        parts.append(iv["statement"].widened_note(_lang(L)))
+    return _SEP[_lang(L)].join(parts) or None
 
 
 def description_zh(res: dict, lab: dict | None = None) -> dict[str, str]:

@@ -280,10 +280,15 @@ def e_draft_segments(res: dict, L: dict) -> list:
 def interval_cell(st: dict, lang: str) -> str:
     """The coverage interval of an item stated by it (:func:`stated_item` ``interval``), in
     the short form of a table cell whose unit is in another column: "≤ 0.021 (p = 95 %)" or
-    "[0.066, 0.204] (p = 95 %)"; "" for an item stated by U."""
+    "[0.066, 0.204] (p = 95 %)"; "" for an item stated by U. Where the statement rule
+    widened the ends for a Monte Carlo's unsettled digit, its note follows."""
     if st.get("interval") is None:
         return ""
-    return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
+    stmt = st["interval"]["statement"]
+    cell = stmt.interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
+    if stmt.widened is not None:
+        cell += ("；" if lang == "zh" else "; ") + stmt.widened_note(lang)
+    return cell
 
 
 #: ``k_source`` of an item whose k is its budget's combined distribution's
