@@ -33,7 +33,8 @@ def _ends_over_seeds(monkeypatch, recs, seeds=16):
         val, _vals, u, _m, _fit = I.power_on_drift_budget(recs, 60, lambda sep: 0.0, None)
         ends.append(u.interval)
         targets.append(settled_numerical_u(val, u.interval, nonnegative=True))
-        counts.append(int(u.components[0]["source"].split(" seeded")[0].rsplit(" ", 1)[-1]))
+        counts.append(u.interval_draws)
+        assert f" {u.interval_draws} seeded" in u.components[0]["source"]     # as it says
         assert u.interval_numerical_u <= targets[-1] or counts[-1] == 400 * I.POWER_ON_MC_MAX_BLOCKS
     return np.array(ends), max(targets), counts
 

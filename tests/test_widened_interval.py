@@ -69,6 +69,11 @@ def unsettled(request, tmp_path_factory):
     it = items[item]
     unc = it["uncertainty"]
     assert unc.get("interval_numerical_u") and unc.get("interval"), unc
+    # how many draws the ends come from, beside their numerical u (JCGM 101's M)
+    assert isinstance(unc.get("interval_draws"), int) and unc["interval_draws"] >= 400, unc
+    for other in items.values():        # every Monte Carlo interval says both
+        o = other.get("uncertainty") or {}
+        assert ("interval_numerical_u" in o) == ("interval_draws" in o), (other["title"], o)
     value = it["value"]
     unc["interval_numerical_u"] = interval_reach(value, unc["interval"], nonnegative=True)
     out = {}

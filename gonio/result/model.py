@@ -142,6 +142,9 @@ class Uncertainty:
     #: from the finite number of draws (JCGM 101 7.9), which decides the decimal place the
     #: ends are stated at (:func:`gonio.result.statement.state_interval`); None: exact
     interval_numerical_u: float | None = None
+    #: for an interval taken from a Monte Carlo's draws: how many draws its ends come from
+    #: (JCGM 101 7.2's M; an adaptive procedure's total, 7.9.4); None: not a Monte Carlo's
+    interval_draws: int | None = None
 
     @property
     def p(self) -> float | None:
@@ -164,6 +167,8 @@ class Uncertainty:
                 out["u_c_of"] = self.u_c_of or u_c_of_interval(self.coverage_probability)
             if self.interval_numerical_u is not None:
                 out["interval_numerical_u"] = _f(self.interval_numerical_u)
+            if self.interval_draws is not None:
+                out["interval_draws"] = int(self.interval_draws)
         if self.monte_carlo is not None:
             out["monte_carlo"] = json_safe(self.monte_carlo)
         return out
@@ -178,7 +183,7 @@ class Uncertainty:
                    d.get("k_source") or "", None if iv is None else (iv[0], iv[1]),
                    d.get("u_c_of") if d.get("u_c_of") != u_c_of_interval(
                        d.get("coverage_probability")) else None,
-                   d.get("interval_numerical_u"))
+                   d.get("interval_numerical_u"), d.get("interval_draws"))
 
 
 @dataclass(frozen=True)

@@ -1600,7 +1600,7 @@ def bias_instability(ctx: Context) -> Item:
     # one statement: the interval of the rule's own distribution (JCGM 101 7.7), no k, no ν
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
                 k_source="floor rule's distribution (pivot)", interval=(lo, hi),
-                interval_numerical_u=num_u)
+                interval_numerical_u=num_u, interval_draws=n_draws)
     return Item("bias_instability", t, cl, un, value, uncertainty=u, details={
         "tau_floor_s": float(allan.tau_s[i]), "fit": fit.to_dict(),
         "floor_reading_dph": val, "floor_rule_bias_dph": val - value,
@@ -2427,7 +2427,8 @@ def _power_on_budget_at(recs, nr: int, drift_u, drift_coef, coef_dof, blocks, fi
     # its ends stated to the digits the replicates' number supports (JCGM 101 7.9)
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
                 k_source=K_SOURCE_POWER_ON, interval=(lo, hi),
-                interval_numerical_u=power_on_interval_numerical_u(v_star - v_star.mean(), nu))
+                interval_numerical_u=power_on_interval_numerical_u(v_star - v_star.mean(), nu),
+                interval_draws=int(v_star.size))
     return value, vals, u, m_sel, fit
 
 

@@ -443,7 +443,7 @@ class Analysis:
                         unc["components"], unc["u_c"], unc["U"], unc["k"], unc["nu_eff"],
                         unc.get("monte_carlo"), unc.get("coverage_probability"),
                         unc.get("k_source") or "", unc.get("interval"), unc.get("u_c_of"),
-                        unc.get("interval_numerical_u")),
+                        unc.get("interval_numerical_u"), unc.get("interval_draws")),
                     details, nonnegative=bool((unc or {}).get("nonnegative")))
 
     def result(self) -> Result:

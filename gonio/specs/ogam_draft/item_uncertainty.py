@@ -162,6 +162,8 @@ class ItemUncertainty:
     #: :func:`uncertainty.stdev.range_belt_numerical_u`), or None: the statement rule prints
     #: no digit of the ends a rerun of the draws would change.
     interval_numerical_u: float | None = None
+    #: How many draws ``interval``'s ends come from (JCGM 101 7.2's M), or None.
+    interval_draws: int | None = None
 
     @property
     def U(self) -> float:
@@ -187,6 +189,8 @@ class ItemUncertainty:
             d["nonnegative"] = True
         if self.interval_numerical_u is not None:
             d["interval_numerical_u"] = float(self.interval_numerical_u)
+        if self.interval_draws is not None:
+            d["interval_draws"] = int(self.interval_draws)
         return d
 
 
@@ -1614,7 +1618,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                 interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
                    interval_numerical_u=shifted_belt_numerical_u(k_i * to_pct,
-                                                                 errs[table_reading], shift))
+                                                                 errs[table_reading], shift),
+                   interval_draws=len(errs[table_reading]))
 
 
 def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibration, *,
@@ -1679,7 +1684,8 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
                    measured=float(c.measured),
                    interval_numerical_u=max(range_belt_numerical_u(k_i * to_pct,
-                                                                   errs["calibrated"])))
+                                                                   errs["calibrated"])),
+                   interval_draws=len(errs["calibrated"]))
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -2206,7 +2212,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     # quadrature move each end by at most the belt's own end's change)
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
                    measured=float(c.measured),
-                   interval_numerical_u=max(range_belt_numerical_u(x * f, err * f)))
+                   interval_numerical_u=max(range_belt_numerical_u(x * f, err * f)),
+                   interval_draws=len(err))
 
 
 def _in_belt(value: float, lo: float, hi: float) -> float:
