@@ -2211,9 +2211,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     # the belt's ends' numerical u carried to the stated ends (the shift and the selection's
     # quadrature move each end by at most the belt's own end's change)
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
-                   measured=float(c.measured),
-                   interval_numerical_u=max(range_belt_numerical_u(x * f, err * f)),
-                   interval_draws=len(err))
+                   measured=float(c.measured), interval_draws=len(err),
+                   interval_numerical_u=max(range_belt_numerical_u(x * f, err * f)))
 
 
 def _in_belt(value: float, lo: float, hi: float) -> float:
