@@ -107,6 +107,12 @@ def test_every_output_states_the_widened_ends(unsettled):
     assert html.count("ends widened by") >= 1
     zh = (u["dir"]["zh"] / "certificate.html").read_text(encoding="utf-8")
     assert WIDENED_NOTE["zh"].split("{w}")[0] in zh
+    # items.csv: the numbers of the one statement, unrounded: the widened ends
+    import pandas as pd
+    csv = pd.read_csv(u["dir"]["en"] / "tables" / "items.csv").set_index("item")
+    lo_w = max(u["lo"] - 2 * u["s"], 0.0)
+    assert csv.loc[u["item"], "interval_low"] == pytest.approx(lo_w, abs=1e-15)
+    assert csv.loc[u["item"], "interval_high"] == pytest.approx(u["hi"] + 2 * u["s"], rel=1e-12)
     dcc = next(u["dir"]["en"].glob("*.xml")).read_text(encoding="utf-8")
     assert "ends widened by" in dcc
     zh_dcc = next(u["dir"]["zh"].glob("*.xml")).read_text(encoding="utf-8")

@@ -752,19 +752,13 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     if nonnegative and lo < 0:
         raise GonioError(f"{where}: a non-negative quantity's interval reaches below zero; "
                          "not stated")
+    lo, hi, widen = numerically_widened(value, (lo, hi), numerical_u=numerical_u,
+                                        nonnegative=nonnegative)
     gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
-    dec = decimals_for_sig(gap, 2)
-    widen = 0.0
-    if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0:
-        if numerical_decimals(numerical_u) < decimals_for_sig(gap, 1):
-            # not one digit settled: the ends out by the scatter's reach, 2·s
-            widen = 2.0 * float(numerical_u)
-            lo = max(lo - widen, 0.0) if nonnegative else lo - widen
-            hi += widen
-            gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
-            dec = decimals_for_sig(gap, 1)
-        else:   # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
-            dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
+    dec = decimals_for_sig(gap, 1 if widen else 2)
+    if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0 and not widen:
+        # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
+        dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
     one_sided = nonnegative and lo == 0
     q = Decimal(1).scaleb(-dec)
     with _wide():
@@ -785,6 +779,30 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
         Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff, chi2), p_text(p), unit_s,
                   upper=ht if one_sided else None, exponent=exponent, decimals=dec,
                   interval=(_scaled(lr, exponent, md), ht), widened=wt), value, nonnegative)
+
+
+def numerically_widened(value: float, interval: tuple[float, float], *,
+                        numerical_u: float | None = None,
+                        nonnegative: bool = False) -> tuple[float, float, float]:
+    """(lo, hi, w): a Monte Carlo interval's ends as :func:`state_interval` states them
+    before rounding. Where the draws' numerical standard uncertainty ``numerical_u`` settles
+    not even one significant digit of the reach (:func:`interval_reach`; 4·s above a unit
+    of that digit, JCGM 101 7.9.4), both ends are moved out by w = 2·s (the lower not below 0
+    for a non-negative quantity); otherwise they are returned as given, w = 0.
+
+    >>> numerically_widened(0.1, (0.07, 0.13), numerical_u=0.002)         # settled at 0.01
+    (0.07, 0.13, 0.0)
+    >>> tuple(round(x, 6) for x in numerically_widened(0.1, (0.07, 0.13), numerical_u=0.006))
+    (0.058, 0.142, 0.012)
+    """
+    lo, hi = float(interval[0]), float(interval[1])
+    if numerical_u is None or not math.isfinite(numerical_u) or not numerical_u > 0:
+        return lo, hi, 0.0
+    gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
+    if numerical_decimals(numerical_u) >= decimals_for_sig(gap, 1):
+        return lo, hi, 0.0
+    w = 2.0 * float(numerical_u)
+    return (max(lo - w, 0.0) if nonnegative else lo - w), hi + w, w
 
 
 def interval_reach(value: float, interval: tuple[float, float], *,

@@ -20,7 +20,8 @@ import pandas as pd
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.result.statement import (K_SOURCE_MAX_ABS, chi2_nu, chi2_stated_nu, coverage_k,
-                                    item_statement, p_text, stated_nu, u_c_certified)
+                                    item_statement, numerically_widened, p_text, stated_nu,
+                                    u_c_certified)
 
 ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "interval_low",
                 "interval_high", "measured", "conformity"]
@@ -68,7 +69,10 @@ def item_row(key: str, it) -> dict:
       the extreme max|x_i| the interval is of (the signed one stays in results.json); a
       non-negative quantity whose estimate fell below zero, stated by its upper bound
       alone, has ``value`` empty, as the certificate states no value (the signed estimate
-      stays in results.json).
+      stays in results.json); where the statement widened a Monte Carlo interval's ends
+      for draws that settle no digit (``Statement.widened``), the widened ends
+      (:func:`~gonio.result.statement.numerically_widened`; results.json keeps the computed
+      ones).
     ``u`` is the combined standard uncertainty u_c where the certificate states it, empty for
     a bound-condition item (:func:`~gonio.result.statement.u_c_certified`: its quadrature
     u_c is not certified; its ``nu`` is then the ν of the rest, ν_rest, as the certificate
@@ -95,6 +99,10 @@ def item_row(key: str, it) -> dict:
     if st is not None and st.interval is not None:
         if unc.interval is not None:
             lo, hi = float(unc.interval[0]), float(unc.interval[1])
+            if st.widened is not None:  # the ends as stated: out by the draws' 2·s
+                lo, hi, _ = numerically_widened(it.value, (lo, hi),
+                                                numerical_u=unc.interval_numerical_u,
+                                                nonnegative=bool(it.nonnegative))
         else:                   # a non-negative quantity's [0, value + U] (state())
             lo, hi = 0.0, float(it.value) + float(unc.U)
         if unc.k is None and unc.k_source == K_SOURCE_MAX_ABS:
