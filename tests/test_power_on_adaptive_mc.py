@@ -41,7 +41,7 @@ def _ends_over_seeds(monkeypatch, recs, seeds=16):
 
 def test_the_stated_ends_are_settled_at_their_digit(monkeypatch):
     """16 replicate seeds: the ends' standard deviation is within the settled value s ≤ δ/4
-    (0.00025 °/s here; measured 0.00014 / 0.00016, most seeds with 1600–5600 replicates); with one block
+    (0.00025 °/s here; measured 0.00017 / 0.00012, 800–4400 replicates); with one block
     of 400 the lower end scattered 0.00046 — the control below."""
     recs = _records()
     ends, target, counts = _ends_over_seeds(monkeypatch, recs)

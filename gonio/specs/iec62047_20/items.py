@@ -2201,7 +2201,7 @@ def power_on_block_rng(block: int) -> np.random.Generator:
     """The random numbers of block ``block`` of 5.3.3.5's replicates: the first from
     :data:`POWER_ON_MC_SEED` alone, block b > 0 from the seed sequence (seed, b) —
     independent streams, fixed, so the same records give the same value and more blocks
-    add replicates without changing the first ones.
+    add replicates without changing the first ones (the fitting decision is block 0's).
 
     >>> float(power_on_block_rng(0).random()) == float(np.random.default_rng(POWER_ON_MC_SEED).random())
     True
@@ -2283,8 +2283,9 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
     reference).
 
     The number of replicates is JCGM 101 7.9's adaptive procedure (:func:`power_on_adaptive`):
-    one block of :data:`POWER_ON_MC_TRIALS`, then as many blocks as the interval's ends need
-    to be settled at the digit stated, up to :data:`POWER_ON_MC_MAX_BLOCKS`; the fitting
+    two blocks of :data:`POWER_ON_MC_TRIALS` (7.9.4 f: stability is judged on the scatter of
+    h ≥ 2 sequences, never on one alone), then as many more as the interval's ends need to
+    be settled at the digit stated, up to :data:`POWER_ON_MC_MAX_BLOCKS`; the fitting
     decision (one transient or one per record) is the first block's."""
     cache: dict = {}                     # each block's replicates, drawn once
     first = _power_on_budget_at(recs, nr, drift_u, drift_coef, coef_dof, (0,), cache=cache)
@@ -2296,15 +2297,20 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None,
 def power_on_adaptive(first, evaluate):
     """JCGM 101 7.9.4's adaptive Monte Carlo for 5.3.3.5, reading taken. ``first``: the
     budget (value, readings, Uncertainty, contenders, fit) from block 0 alone;
-    ``evaluate`` (block indices → the same from those blocks). Where block 0's ends are not
-    settled at the digit stated (:func:`power_on_blocks_needed` on its quantiles' numerical
-    u), blocks 1, 2, … are evaluated one by one, each a whole budget on its own
+    ``evaluate`` (block indices → the same from those blocks). Block 1 is always evaluated
+    too (7.9.4 f: with h = 1 the procedure draws another sequence; one block's own quantile
+    estimate misses the scatter ν_eff's shares add, and read it low on records the blocks
+    showed unsettled), then blocks 2, 3, … one by one, each a whole budget on its own
     replicates, until :func:`power_on_block_numerical_u` of the h block results is settled
     at the digit of the budget on all h·:data:`POWER_ON_MC_TRIALS` replicates together
-    (7.9.4 e: the result stated), or h reaches :data:`POWER_ON_MC_MAX_BLOCKS`; that budget
-    is returned, its ends' numerical u that of the blocks (every numerical source in it:
-    the quantiles, the excess, the slope g, ν_eff's shares)."""
+    (7.9.4 e: the result stated), or h reaches :data:`POWER_ON_MC_MAX_BLOCKS` (a cap of one
+    block returns ``first``); that budget is returned, its ends' numerical u that of the
+    blocks (every numerical source in it: the quantiles, the excess, the slope g, ν_eff's
+    shares)."""
     results, out = [first], first
+    if POWER_ON_MC_MAX_BLOCKS >= 2:     # 7.9.4 f: never judged on one sequence alone
+        results.append(evaluate((1,)))
+        out = evaluate((0, 1))
     while True:
         h = len(results)
         s = power_on_block_numerical_u([r[2].interval for r in results],
