@@ -67,7 +67,8 @@ def test_power_on_drift_budget_with_transient(a_dps, tau_s):
     88; value ± 1.96 u_c: 91), a run of high values (z sd 1.18 there); the 400 held 380 in
     the pivot alone (0.950, z +0.15, sd 1.00), fresh seeds 1 and 2: 384 and 382. With the
     adaptive replicates (JCGM 101 7.9.4; 5–7 blocks of 400 on the first six trials at
-    τ 30 s): τ 300 s 384/400, z +0.01, sd 1.00; τ 30 s 379/400, z +0.03, sd 1.00."""
+    τ 30 s): τ 300 s 384/400, z +0.01, sd 1.00; τ 30 s 379/400, z +0.03, sd 1.00; with two
+    blocks at least (7.9.4 f): 384/400, z +0.01, sd 0.99 and 379/400, z +0.03, sd 0.99."""
     z, hits = _study(a_dps, tau_s, 400, seed=int(tau_s))
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.3, z.mean()
