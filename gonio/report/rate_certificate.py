@@ -407,10 +407,11 @@ def dcc_translator(result, content_fn):
     if norm:
         extra[norm[0]] = norm[1]
     from gonio.result.statement import item_statement
-    for it in res.get("items", {}).values():    # a description that is the statement itself
+    for it in res.get("items", {}).values():    # a description that is the statement itself:
         if it.get("measured") and (it.get("uncertainty") or {}).get("interval_numerical_u"):
-            st = item_statement(it)             # (its ends widened for a Monte Carlo)
-            extra[st.text("en")] = st.text("zh")
+            st = item_statement(it)             # one whose ends were widened (rate_dcc)
+            if st.widened is not None:
+                extra[st.text("en")] = st.text("zh")
     # the guard-band note of the items decided on their interval (conformity_statements)
     from gonio.report.dcc import band_unit
     from gonio.report.stated import interval_band_note

@@ -756,7 +756,7 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
                                         nonnegative=nonnegative)
     gap = interval_reach(value, (lo, hi), nonnegative=nonnegative)
     dec = decimals_for_sig(gap, 1 if widen else 2)
-    if numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0 and not widen:
+    if not widen and numerical_u is not None and math.isfinite(numerical_u) and numerical_u > 0:
         # JCGM 101 7.9.2: ndig 2 where the draws settle it, else 1 (never fewer)
         dec = min(dec, max(numerical_decimals(numerical_u), decimals_for_sig(gap, 1)))
     one_sided = nonnegative and lo == 0
