@@ -54,6 +54,7 @@ def backup(store, path: str | os.PathLike) -> dict:
     from gonio import __version__
 
     path = Path(path)
+    _not_the_store(store, path)
     counts: dict[str, int] = {}
     doc = {"format": FORMAT, "gonio_version": __version__, "tables": {}}
     with store.session() as s:
@@ -90,6 +91,25 @@ def backup(store, path: str | os.PathLike) -> dict:
         raise
     counts["files"] = len(shas)
     return counts
+
+
+def _not_the_store(store, path: Path) -> None:
+    """A backup's target is none of the records' own files: the SQLite database file (and its
+    journal files, and the files a restore set aside beside it) or anything in the blob
+    store; a GonioError naming the target otherwise (the rename would put the archive in
+    their place)."""
+    target = Path(os.path.abspath(path.expanduser()))
+    real = Path(os.path.realpath(target))
+    own = []
+    if store.engine.dialect.name == "sqlite" and store.engine.url.database:
+        db = Path(os.path.realpath(store.engine.url.database))
+        own = [db.parent / (db.name + suffix) for suffix in ("", "-wal", "-shm", "-journal")]
+        if real.parent == db.parent and real.name.startswith(db.name + ".replaced-"):
+            own.append(real)
+    blob_root = Path(os.path.realpath(store.blob_root))
+    if real in own or real == blob_root or blob_root in real.parents:
+        raise GonioError("the archive would replace the records' own file: write the backup "
+                         "elsewhere (e.g. the backups folder)", file=path)
 
 
 def damaged_files(store, shas) -> list[str]:
@@ -833,7 +853,9 @@ def verify(store) -> tuple[dict, list[str]]:
     """Check a live database as a backup and a restore check an archive: every stored file
     present and matching its SHA-256, every computed calibration's result rows matching its
     stored results.json and, where it was signed, its seal the one signed (at review, at
-    approval, on its newest certificate). Returns (counts, problems: one line each)."""
+    approval, on its newest certificate), and a reviewed or approved calibration's details
+    the ones its reviewed draft states (:func:`gonio.records.services.details_changed`).
+    Returns (counts, problems: one line each)."""
     from gonio.records import services
     from gonio.records.models import Calibration, Certificate
 
@@ -861,4 +883,7 @@ def verify(store) -> tuple[dict, list[str]]:
             if sealed and sealed != now:
                 problems.append(f"calibration {cid}: its stored result no longer matches the "
                                 f"seal of {what}")
+        if status in ("reviewed", "issuing"):     # what was reviewed is what is approved
+            problems += [f"calibration {cid}: {line}"
+                         for line in services.details_changed(store, cid)]
     return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems

@@ -294,6 +294,14 @@ def set_settings(store, actor: User | None, **values) -> dict:
     if "decision_rule" in values or "guard_band_factor" in values:
         check_guard_setting(settings(store) | values, values)
     with store.writing() as s:
+        if "min_people" in values and values["min_people"] != str(min_people(s)):
+            waiting = s.scalars(select(Calibration.pending_number).where(
+                Calibration.pending_number != "").order_by(Calibration.id)).all()
+            if waiting:   # approved under the rule in force; their certificates state it
+                raise GonioError(f"{len(waiting)} approved certificate(s) wait for their issue "
+                                 f"({waiting[0]}…), approved under min_people "
+                                 f"{min_people(s)}: change it once they are issued",
+                                 key="min_people")
         for k, v in values.items():
             row = s.get(Setting, k)
             before = state(row)
@@ -367,8 +375,32 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
         raise GonioError("letters, digits, '.', '_' and '-' only", key="username")
     user = User(username=username, full_name=text(full_name, "full_name"),
                 password_hash=hash_password(password), roles=check_roles(roles))
+    with store.session() as s:
+        _distinct_name(s, user)
     return _create(store, actor, user, "user", User.username == username,
                    "a user with this name exists", "username")
+
+
+def _printed_name(name: str) -> str:
+    """A person's name as compared for telling people apart: case and spacing folded.
+
+    >>> _printed_name("  Alice   SMITH ") == _printed_name("alice smith")
+    True
+    """
+    return " ".join(name.split()).casefold()
+
+
+def _distinct_name(s: Session, u: User) -> None:
+    """The name a certificate prints for ``u`` (:func:`_name`: the full name, else the user
+    name) is no other user's (active or not: their signatures stand), case and spacing
+    folded: the calibrated, checked and approved by of a certificate tell their people
+    apart (ISO/IEC 17025 7.8.2.1 k). A GonioError naming the field otherwise."""
+    mine = _printed_name(_name(u))
+    for other in s.scalars(select(User).where(User.username != u.username)):
+        if _printed_name(_name(other)) == mine:
+            raise GonioError(f"the user {other.username!r} is named {_name(other)!r} on "
+                             "certificates already: give every person a name that tells them "
+                             "apart", key="full_name" if u.full_name else "username")
 
 
 def update_user(store, actor: User | None, username: str, *, active: bool | None = None,
@@ -393,6 +425,8 @@ def update_user(store, actor: User | None, username: str, *, active: bool | None
             u.roles = check_roles(roles)
         if full_name is not None:
             u.full_name = text(full_name, "full_name")
+            with s.no_autoflush:
+                _distinct_name(s, u)
         if password:
             u.password_hash = hash_password(password)
         s.flush()
@@ -568,7 +602,9 @@ def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire
     """Apply ``values`` (only the fields to change) to the row and, with ``retire`` True or
     False, retire it today or bring it back; its audit event (before, after) in the same
     transaction. ``unique(obj)``: a statement matching another row that would clash
-    (refused with ``message``)."""
+    (refused with ``message``). A change of what a certificate states of a customer, an
+    instrument or a standard reaches the calibrations naming it in the same transaction
+    (:func:`_stated_change`)."""
     if retire is not None:
         values["retired_on"] = records_today(store) if retire else None
     with store.writing() as s:
@@ -586,9 +622,69 @@ def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire
         after = state(obj)
         if after != before:
             audit(s, actor, "update", entity, obj.id, before, after)
+            if entity in STATED_FIELDS:
+                _stated_change(s, actor, entity, obj.id, before, after)
         s.commit()
         s.expunge(obj)
     return obj
+
+
+#: The fields of a customer, an instrument and a standard that a certificate states.
+STATED_FIELDS = {"customer": ("name", "address"),
+                 "instrument": ("customer_id", "kind", "manufacturer", "model", "serial",
+                                "gyro_type"),
+                 "standard": ("name", "identifier", "accuracy", "certificate", "traceability")}
+
+
+def _naming(s: Session, entity: str, obj_id: int) -> list:
+    """The calibrations whose certificate names the customer, instrument or standard
+    ``obj_id`` and is not yet issued: those still open to a change of their details
+    (:data:`ATTACHABLE`) and those approved and waiting for their issue (a reserved
+    number)."""
+    q = select(Calibration).where(Calibration.status.in_(ATTACHABLE)
+                                  | (Calibration.pending_number != ""))
+    if entity == "instrument":
+        q = q.where(Calibration.instrument_id == obj_id)
+    elif entity == "customer":
+        q = q.join(Instrument, Instrument.id == Calibration.instrument_id).where(
+            Instrument.customer_id == obj_id)
+    else:
+        q = q.join(CalibrationStandard, CalibrationStandard.calibration_id == Calibration.id
+                   ).where(CalibrationStandard.standard_id == obj_id)
+    return list(s.scalars(q.order_by(Calibration.id).with_for_update()))
+
+
+def _stated_change(s: Session, actor: User, entity: str, obj_id: int, before: dict,
+                   after: dict) -> None:
+    """A change of what certificates state of a customer, an instrument or a standard
+    (:data:`STATED_FIELDS`) reaches every calibration naming it that is not yet issued, as an
+    attach does (ISO/IEC 17025 7.8.1.1: what is issued is what was checked): a reviewed one
+    goes back to its review, one with a stored result has its draft rendered again
+    (:data:`DRAFTING`), an amendment records the change (``attach`` audit event on the
+    calibration: :func:`amendment_changers`, one changes, another approves). A calibration
+    approved and waiting for its issue refuses the change (GonioError: its certificate
+    states what was approved; change it once issued, then amend)."""
+    changed = {k: [before.get(k), after.get(k)] for k in STATED_FIELDS[entity]
+               if before.get(k) != after.get(k)}
+    if not changed:
+        return
+    for cal in _naming(s, entity, obj_id):
+        if cal.pending_number:
+            raise GonioError(f"calibration {cal.id} is approved ({cal.pending_number} "
+                             f"reserved) and waits for its issue: its certificate states this "
+                             f"{entity} as approved; change it once the certificate is issued, "
+                             "then amend the certificate", key=entity)
+        cal_before = state(cal)
+        if cal.status == "reviewed":     # what was reviewed changed: reviewed again
+            cal.status, cal.reviewed_by_id, cal.reviewed_at = "computed", None, None
+            cal.reviewed_seal, cal.review_comment = "", ""
+        if cal.status in REDRAFTED and cal.results_sha256:   # its draft shows the change
+            cal.status, cal.progress = DRAFTING, (f"waiting for a worker to render the draft "
+                                                  f"certificate with the {entity} changed")
+            cal.worker_pid, cal.worker_host, cal.error = None, "", ""
+        s.flush()
+        audit(s, actor, "attach", "calibration", cal.id, cal_before,
+              dict(state(cal), changed={entity: {"id": obj_id, **changed}}))
 
 
 def _given(**fields) -> dict:
@@ -2048,7 +2144,8 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     person who neither asked for it nor changed anything of it (:func:`amendment_changers`:
     one changes, another approves), whatever ``min_people``; with ``min_people`` 2 that
     person may be the calibration's creator (the two-person laboratory: the reviewer asks
-    and changes, the creator approves), with 3 never."""
+    and changes, the creator approves), with 3 never. The same for a first issue: who
+    reviewed it and last changed its details (:func:`last_changer`) does not approve it."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
@@ -2068,6 +2165,21 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
             and cal.reviewed_by_id == actor.id:
         raise GonioError("the person who reviewed the calibration may not approve it (the "
                          "laboratory requires three different people)", key="role")
+    if action == "approve" and not amending and cal.reviewed_by_id == actor.id \
+            and last_changer(s, cal.id) == actor.id:
+        raise GonioError("the person who last changed the calibration's details (standards, "
+                         "environment, what its certificate states) and reviewed it may not "
+                         "approve it too (one changes, another checks): another person "
+                         "reviews or approves", key="role")
+
+
+def last_changer(s: Session, cal_id: int) -> int | None:
+    """The user of a calibration's latest ``attach`` audit event (its standards, environment
+    or the details its certificate states changed: :func:`attach_conditions`,
+    :func:`_stated_change`), None where nobody changed them."""
+    return s.scalar(select(AuditEvent.user_id).where(
+        AuditEvent.action == "attach", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(int(cal_id))).order_by(AuditEvent.id.desc()).limit(1))
 
 
 def amendment_changers(s: Session, cal_id: int) -> set[int]:
@@ -2085,11 +2197,14 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
-                number: bool = False, **changes) -> Calibration:
-    """Check the state (and the second person), apply ``changes``, audit — one transaction;
-    with ``number`` a certificate number is reserved in it (none is used up by a refusal)."""
+                number: bool = False, check=None, **changes) -> Calibration:
+    """Check the state (and the second person; ``check(s, cal)``: the caller's own check
+    after those), apply ``changes``, audit — one transaction; with ``number`` a certificate
+    number is reserved in it (none is used up by a refusal)."""
     with store.writing() as s:
         cal = _check(s, actor, cal_id, action, allowed)
+        if check is not None:
+            check(s, cal)
         before = state(cal)
         if number and not cal.pending_number:
             changes["pending_number"] = _reserve_number(s, utcnow().year)
@@ -2138,8 +2253,9 @@ def seal(store, cal_id: int) -> str:
     an entry is sealed as before). Every stored file is checked against its digest
     and every row against the stored results.json first, its kept statement too (stated,
     interval ends: :func:`gonio.records.results.result_rows`; a row that keeps none, None,
-    is drawn from the stored result itself): a GonioError names what no longer matches (a
-    row changed in the database, a file changed on disk). The kept statement is not hashed:
+    is drawn from the stored result itself), and results.json's readings against the
+    calibration's (:func:`_same_readings`): a GonioError names what no longer matches (a
+    row changed in the database, a file changed on disk, the link to the readings). The kept statement is not hashed:
     it follows from results.json, whose digest is, so a seal signed before rows kept it
     stays the seal."""
     import hashlib
@@ -2162,6 +2278,7 @@ def seal(store, cal_id: int) -> str:
             raise GonioError(f"the stored {name} is missing or does not match its SHA-256",
                              key=f"calibration {cal_id}")
     doc = json.loads(file_bytes(store, cal.results_sha256))
+    _same_readings(doc, cal.readings_sha256, cal_id)
     _same_table_calibration(doc, files.get(TABLE_CALIBRATION), cal_id)
     if entry is not None and files.get(TABLE_CALIBRATION) != entry.sha256:
         raise GonioError(f"the stored {TABLE_CALIBRATION} is not the file of the register's "
@@ -2185,6 +2302,18 @@ def seal(store, cal_id: int) -> str:
             "valid_from": entry.valid_from.isoformat(), "due_on": entry.due_on.isoformat()}
     doc = json.dumps(sealed, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(doc.encode("utf-8")).hexdigest()
+
+
+def _same_readings(results: dict, stored: str | None, cal_id) -> None:
+    """The readings a stored results.json was computed from (its ``source.sha256``) are the
+    calibration's stored readings (``stored``, their digest): a GonioError naming both
+    otherwise (the calibration's link to its raw data changed: its result is not theirs).
+    A results.json without the digest is left to the other checks."""
+    used = str(((results or {}).get("source") or {}).get("sha256") or "")
+    if used and stored and used != stored:
+        raise GonioError(f"the stored results.json was computed from the readings "
+                         f"{used[:16]}…, not from the calibration's stored readings "
+                         f"{stored[:16]}…: not sealed", key=f"calibration {cal_id}")
 
 
 def recorded_table_calibrations(results: dict) -> set[str]:
@@ -2257,8 +2386,17 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
         raise GonioError("the stored result no longer matches the one reviewed (its seal "
                          f"{signed[:12]}… is not the signed {before[:12] or '(none)'}…): "
                          "nothing approved", key=f"calibration {cal_id}")
+    changed = details_changed(store, cal_id) if cal.status == "reviewed" else []
+
+    def as_reviewed(s, cal):        # after the state, duties and completeness checks
+        if changed and cal.status == "reviewed":
+            more = f" and {len(changed) - 1} more" if len(changed) > 1 else ""
+            raise GonioError(f"the records state the calibration differently from the draft "
+                             f"that was reviewed ({changed[0]}{more}): nothing approved "
+                             "(gonio db verify lists it)", key=f"calibration {cal_id}")
     return _transition(store, actor, cal_id, "approve", ("reviewed", "amending"),
-                       number=True, status="issuing", approved_by_id=actor.id,
+                       number=True, check=as_reviewed, status="issuing",
+                       approved_by_id=actor.id,
                        approved_at=utcnow(), approved_seal=signed,
                        progress="waiting for a worker", error="")
 
@@ -2497,6 +2635,8 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             import tomllib
             basis = tomllib.loads(file_bytes(store, drafted.sha256).decode("utf-8"))
             lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
+            if final and not cal.pending_replaces_id:   # a first issue: the details reviewed
+                lab.update(_with_reviewed(lab, basis))
         elif cal.lab_sha256 and (own := lab_file(store, cal.lab_sha256, cal.lab_name,
                                                  cal.spec_key)).get("specification_limits"):
             # the calibration's own laboratory file (one naming only its table calibration
@@ -2508,6 +2648,75 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
                                     "agreed": "laboratory's decision rule"}
             lab["specification_limits"] = limits
     return lab
+
+
+#: The laboratory details' sections the reviewer signs with the draft (its stored lab.toml,
+#: sealed with the result): whom and what the certificate names, and the conditions.
+REVIEWED = ("customer", "instrument", "standards", "environment")
+#: The ``certificate`` section's fields signed with the draft (the number and the date of
+#: issue are the issue's own).
+REVIEWED_CERTIFICATE = ("date_of_receipt", "date_of_calibration", "place", "location")
+
+
+def reviewed_part(lab: dict) -> dict:
+    """The part of laboratory details (:func:`lab_details`, or a stored lab.toml read back)
+    that the reviewer signs with the draft: the :data:`REVIEWED` sections (None where
+    absent) and the certificate's :data:`REVIEWED_CERTIFICATE` fields.
+
+    >>> reviewed_part({"customer": {"name": "A"}, "laboratory": {"name": "L"},
+    ...                "certificate": {"number": "DRAFT-1", "place": "P"}})
+    {'customer': {'name': 'A'}, 'instrument': None, 'standards': None, 'environment': None, \
+'certificate': {'place': 'P'}}
+    """
+    part = {k: lab.get(k) for k in REVIEWED}
+    cert = lab.get("certificate") or {}
+    part["certificate"] = {k: cert[k] for k in REVIEWED_CERTIFICATE if k in cert}
+    return part
+
+
+def _with_reviewed(lab: dict, drafted: dict) -> dict:
+    """``lab``'s sections with the reviewed part (:func:`reviewed_part`) taken from
+    ``drafted``, the details the reviewed draft was rendered with."""
+    part = reviewed_part(drafted)
+    out = {k: part[k] if part[k] is not None else [] if k == "standards" else None
+           for k in REVIEWED}      # a section the draft had not: stated none
+    out["certificate"] = dict(lab["certificate"], **part["certificate"])
+    return out
+
+
+def details_changed(store, cal_id: int) -> list[str]:
+    """What the records state now of a calibration (its customer, instrument, standards,
+    environment, dates, place: :func:`reviewed_part`) differently from the draft last
+    rendered for it (its stored lab.toml, sealed with the result): one line each, e.g.
+    ``instrument serial: 'RLG-0001' in the draft, now 'FAKE-9999'``; [] where they agree or
+    no draft is stored (an imported result before its first draft). A change through the
+    records' own edits renders the draft again (:func:`_stated_change`), so a line here is a
+    change made around them (the database edited)."""
+    import tomllib
+
+    from gonio.records.compute import lab_toml
+
+    with store.session() as s:
+        drafted = s.get(CalibrationFile, (int(cal_id), "lab.toml"))
+        sha = drafted.sha256 if drafted is not None else None
+    if sha is None:
+        return []
+    was = reviewed_part(tomllib.loads(file_bytes(store, sha).decode("utf-8")))
+    now = reviewed_part(tomllib.loads(lab_toml(lab_details(store, cal_id, final=False,
+                                                           redraft=True))))
+    lines = []
+    for section, before in was.items():
+        after = now[section]
+        if before == after:
+            continue
+        if isinstance(before, dict) and isinstance(after, dict):
+            lines += [f"{section} {k}: {before.get(k)!r} in the draft, now {after.get(k)!r}"
+                      for k in sorted(set(before) | set(after)) if before.get(k) != after.get(k)]
+        else:
+            def ids(v):
+                return [x.get("identifier") for x in v] if isinstance(v, list) else v
+            lines.append(f"{section}: {ids(before)!r} in the draft, now {ids(after)!r}")
+    return lines
 
 
 def _name(u: User | None) -> str:

@@ -482,6 +482,11 @@ def test_place_and_receipt_on_the_certificate_dcc_and_issued_page(
                        "location = 'customer' WHERE id = :c"),
                   {"p": place, "r": received, "c": cal.id})
         s.commit()
+    # entered around the records: the draft rendered again shows them (else the approval
+    # refuses what the reviewed draft does not state)
+    services.attach_conditions(sqlite_store, people["tech"], cal.id, temperature_c=20.1,
+                               humidity_pct=45)
+    assert worker.execute(sqlite_store, services.claim_next(sqlite_store).id)
     tech = login(app, "tech")
     page = tech.get(f"/calibrations/{cal.id}").text
     assert "until the calibration is approved" in page

@@ -17,6 +17,7 @@ from gonio.records.db import open_store
 from gonio.records.models import Certificate, CertificateCounter
 
 from .conftest import conditions
+from .test_records_services import store_run_as_computed
 
 PASSWORD = "correct horse battery"
 
@@ -59,7 +60,7 @@ def test_kill_during_run_and_during_issue(tmp_path, serve, bench_readings, compu
         other, _ = services.store_file(st, open(bench_readings[1], "rb"))  # another run
         cal2 = services.create_calibration(st, tech, **dict(args, readings_sha256=other))
         services.claim_next(st)
-        services.store_run(st, cal2.id, computed_folder)
+        store_run_as_computed(st, cal2.id, computed_folder)
         services.review(st, rev, cal2.id, accept=True)
         services.approve(st, services.create_user(st, None, "rev2", PASSWORD, "reviewer"),
                          cal2.id)                     # a third person approves

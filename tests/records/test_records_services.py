@@ -25,13 +25,45 @@ SMALL_PROTOCOL = __import__("pathlib").Path(__file__).resolve().parents[1] / "da
 
 def fake_pipeline(folder):
     """The pipeline's real output of the session fixture copied into ``out`` (the
-    computation itself is exercised by the browser and kill tests)."""
+    computation itself is exercised by the browser and kill tests), its results.json naming
+    the readings it was given (as the pipeline's does: the seal checks it)."""
     def run(readings, out, *, spec_key, protocol=None, lab=None):
         shutil.copytree(folder, out)
+        of_readings(out, Path(readings))
         if lab is not None:
             decide_as_the_pipeline(out / "results.json", spec_key, lab)
         return sorted(p.name for p in out.iterdir())
     return run
+
+
+def of_readings(out: Path, readings: Path) -> Path:
+    """The copied result folder ``out`` made the result of ``readings``: results.json's
+    ``source.sha256`` theirs (a run's result names the readings it was computed from)."""
+    import hashlib
+
+    doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    sha = hashlib.sha256(readings.read_bytes()).hexdigest()
+    if doc["source"]["sha256"] != sha:          # the folder's own readings: as it is
+        doc["source"]["sha256"] = sha
+        (out / "results.json").write_text(json.dumps(doc), encoding="utf-8")
+    return out
+
+
+def store_run_as_computed(store, cal_id: int, folder: Path) -> None:
+    """:func:`services.store_run` of the session's result ``folder`` for calibration
+    ``cal_id``, whose stored readings may be others: a temporary copy made their result
+    (:func:`of_readings`), as a run of them would name them."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "out"
+        shutil.copytree(folder, out)
+        sha = services.calibration(store, cal_id).readings_sha256
+        doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+        if doc["source"]["sha256"] != sha:
+            doc["source"]["sha256"] = sha
+            (out / "results.json").write_text(json.dumps(doc), encoding="utf-8")
+        services.store_run(store, cal_id, out)
 
 
 def decide_as_the_pipeline(path, spec_key, lab):

@@ -28,6 +28,7 @@ from gonio.records import models, services
 from gonio.records.models import AuditEvent, Calibration, CalibrationFile, TableCalibration
 
 from .conftest import PASSWORD, make_people
+from .test_records_services import store_run_as_computed
 
 FILES = {k: (f"# table certificate {k}\ntable_deg,error_arcsec,u_arcsec\n"
              f"0,0.0,0.02\n120,{0.01 * (i + 1):.3f},0.02\n").encode()
@@ -243,7 +244,7 @@ def test_seal_checks_the_register_entry(store, computed_folder):
     people, inst_id, table_id, _ = setup_lab(store)
     tc = register(store, people["tech"], table_id, "TC-1")
     cal = create(store, people["tech"], inst_id, "2025-03-01", [table_id])
-    services.store_run(store, cal.id, computed_folder)
+    store_run_as_computed(store, cal.id, computed_folder)
     sealed = services.seal(store, cal.id)
     other = services.store_file(store, io.BytesIO(FILES["TC-3"]))[0]
     with store.writing() as s:
@@ -565,7 +566,7 @@ def test_seal_binds_the_register_entry(store, computed_folder):
     assert twin.sha256 == tc.sha256 and twin.id != tc.id
     cal = create(store, tech, inst_id, "2025-03-01", [table_id])
     assert cal.table_calibration_id == tc.id
-    services.store_run(store, cal.id, computed_folder)
+    store_run_as_computed(store, cal.id, computed_folder)
     sealed = services.seal(store, cal.id)
     for tampered in (None, twin.id):
         with store.writing() as s:

@@ -30,6 +30,7 @@ from gonio.records.models import (AuditEvent, Calibration, Certificate, TableCal
                                   TableCalibrationWithdrawal)
 
 from .conftest import PASSWORD
+from .test_records_services import store_run_as_computed
 from .test_records_table_register import (FILES, SHA, VALID, create, in_force_here, register,
                                           setup_lab)
 
@@ -120,7 +121,7 @@ def test_late_registration_refused_and_never_changes_a_sealed_entry(store, compu
     tc1 = register(store, tech, table_id, "TC-1")
     cal = create(store, tech, inst_id, "2025-07-01", [table_id])
     assert cal.table_calibration_id == tc1.id
-    services.store_run(store, cal.id, computed_folder)
+    store_run_as_computed(store, cal.id, computed_folder)
     signed = services.seal(store, cal.id)
     with pytest.raises(GonioError) as e:
         reg(store, tech, table_id, "TC-2", "2025-06-01", "2026-03-01")
@@ -174,7 +175,7 @@ def test_withdrawal_two_people_frozen_and_in_force_again(store, computed_folder)
     for _ in range(3):       # computed; reviewed; approved (issuing) — all with TC-2
         made.append(create(store, tech, inst_id, "2025-07-01", [table_id]))
         assert made[-1].table_calibration_id == ids["TC-2"]
-        services.store_run(store, made[-1].id, computed_folder)
+        store_run_as_computed(store, made[-1].id, computed_folder)
     used, in_review, issuing = made
     signed = services.seal(store, used.id)
     for cal in (in_review, issuing):
@@ -302,7 +303,7 @@ def test_withdrawal_on_the_web_and_in_the_export(store, tmp_path, computed_folde
     people, inst_id, table_id, _ = setup_lab(store)
     ids = {k: register(store, people["tech"], table_id, k).id for k in VALID}
     used = create(store, people["tech"], inst_id, "2025-07-01", [table_id])
-    services.store_run(store, used.id, computed_folder)
+    store_run_as_computed(store, used.id, computed_folder)
     app = create_app(store)
     tech, rev, rev2 = (login(app, n) for n in ("tech", "rev", "rev2"))
     reason = "<script>alert(1)</script> wrong file"

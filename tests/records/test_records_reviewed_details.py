@@ -1,0 +1,199 @@
+"""What is issued is what was reviewed: the customer, instrument, standards and conditions a
+certificate states are the ones of the draft its reviewer signed. An edit through the records
+sends a reviewed calibration back to its review with its draft rendered again, is refused
+while an approved one waits for its issue, and counts as a change of an amendment; a change
+made around the records (the database edited) is refused at approval, listed by verify, and
+never reaches the certificate. The people on a certificate are told apart by their names, the
+number of people it states is the one it was approved under, and who last changed what a
+reviewer checks does not approve it alone."""
+
+from __future__ import annotations
+
+import pytest
+from sqlalchemy import text
+
+from gonio.errors import GonioError
+from gonio.records import backup, services, worker
+
+from .test_records_issue import approved, run_issue
+from .test_records_sealed import computed
+from .test_web_security import app  # noqa: F401  (the app fixture, for the store fixtures)
+
+
+def redraft(store, monkeypatch):
+    """Render the draft again as a worker does (nothing computed)."""
+    cal = services.claim_next(store)
+    assert cal is not None and cal.status == services.DRAFTING
+    assert worker.execute(store, cal.id), services.calibration(store, cal.id).error
+    return services.calibration(store, cal.id)
+
+
+def draft_page(store, cal_id) -> str:
+    with store.session() as s:
+        sha = s.get(services.CalibrationFile, (cal_id, "certificate.html")).sha256
+    return services.file_bytes(store, sha).decode("utf-8")
+
+
+def test_an_instrument_edit_after_review_is_reviewed_again(store, people, computed_folder,
+                                                           bench_readings, monkeypatch):
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.update_instrument(store, people["tech"], cal.instrument_id, serial="RLG-0002")
+    now = services.calibration(store, cal.id)
+    assert (now.status, now.reviewed_by_id, now.reviewed_seal) == (services.DRAFTING, None, "")
+    with pytest.raises(GonioError, match="cannot approve a calibration that is drafting"):
+        services.approve(store, people["rev2"], cal.id)
+    assert redraft(store, monkeypatch).status == "computed"
+    assert "RLG-0002" in draft_page(store, cal.id) and "RLG-0001" not in draft_page(store, cal.id)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev2"], cal.id)
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "RLG-0002" in page and "RLG-0001" not in page
+
+
+@pytest.mark.parametrize("what", ["instrument", "customer", "standard"])
+def test_an_edit_is_refused_while_an_approved_certificate_waits(what, store, people,
+                                                                computed_folder,
+                                                                bench_readings, monkeypatch):
+    cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
+    tech = people["tech"]
+    with pytest.raises(GonioError, match="waits for its issue"):
+        if what == "instrument":
+            other = services.add_customer(store, tech, "Other Customer Ltd")
+            services.update_instrument(store, tech, cal.instrument_id, serial="FAKE-9999",
+                                       customer_id=other.id)
+        elif what == "customer":
+            with store.session() as s:
+                cid = s.scalar(text("SELECT customer_id FROM instruments WHERE id = :i"),
+                               {"i": cal.instrument_id})
+            services.update_customer(store, tech, cid, name="Other Customer Ltd")
+        else:
+            with store.session() as s:
+                sid = s.scalar(text("SELECT standard_id FROM calibration_standards WHERE "
+                                    "calibration_id = :c"), {"c": cal.id})
+            services.update_standard(store, tech, sid, accuracy="±99″")
+    # an edit that no certificate states goes through
+    services.update_instrument(store, tech, cal.instrument_id, interval_months=6)
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "RLG-0001" in page and "Example Navigation Co." in page
+    assert "FAKE-9999" not in page and "Other Customer" not in page and "±99″" not in page
+    # issued: the register may change again (an amendment would state it)
+    services.update_instrument(store, tech, cal.instrument_id, serial="RLG-0001A")
+
+
+def test_a_database_edit_is_refused_at_approval_and_never_issued(store, people,
+                                                                 computed_folder,
+                                                                 bench_readings, monkeypatch):
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+
+    def serial(value):
+        with store.writing() as s:
+            s.execute(text("UPDATE instruments SET serial = :v WHERE id = :i"),
+                      {"v": value, "i": cal.instrument_id})
+            s.commit()
+    serial("FAKE-9999")
+    assert services.details_changed(store, cal.id) == [
+        "instrument serial: 'RLG-0001' in the draft, now 'FAKE-9999'"]
+    with pytest.raises(GonioError, match="differently from the draft that was reviewed "
+                                         r"\(instrument serial: 'RLG-0001'"):
+        services.approve(store, people["rev2"], cal.id)
+    assert any("instrument serial" in p for p in backup.verify(store)[1])
+    serial("RLG-0001")
+    assert services.details_changed(store, cal.id) == [] and backup.verify(store)[1] == []
+    services.approve(store, people["rev2"], cal.id)
+    serial("FAKE-9999")                         # after the approval: the issue states the draft's
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "RLG-0001" in page and "FAKE-9999" not in page
+
+
+def test_an_instrument_edit_during_an_amendment_is_a_change(store, people, computed_folder,
+                                                            bench_readings, monkeypatch):
+    """One changes, another approves: the serial corrected in the register during an
+    amendment counts as a change of it (before: only an attach did)."""
+    services.set_settings(store, people["admin"], min_people="2")
+    tr = services.update_user(store, None, "tech", roles="technician reviewer")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    first = run_issue(store, monkeypatch)
+    services.amend(store, people["rev2"], first.id, "serial misread")
+    services.update_instrument(store, tr, cal.instrument_id, serial="RLG-0002")
+    with pytest.raises(GonioError, match="changed the calibration during its amendment"):
+        services.approve(store, tr, cal.id)
+    services.approve(store, people["rev"], cal.id)
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "RLG-0002" in page
+
+
+def test_who_last_changed_and_reviewed_does_not_approve_alone(store, people, computed_folder,
+                                                              bench_readings, monkeypatch):
+    services.set_settings(store, people["admin"], min_people="2")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    rev = people["rev"]
+    services.attach_conditions(store, rev, cal.id, temperature_c="20.4", humidity_pct="55")
+    redraft(store, monkeypatch)
+    services.review(store, rev, cal.id, accept=True)
+    with pytest.raises(GonioError, match="last changed the calibration's details"):
+        services.approve(store, rev, cal.id)
+    # the technician states the conditions again: another person changed them last
+    services.attach_conditions(store, people["tech"], cal.id, temperature_c="20.4",
+                               humidity_pct="55")
+    redraft(store, monkeypatch)
+    services.review(store, rev, cal.id, accept=True)
+    assert services.approve(store, rev, cal.id).status == "issuing"
+
+
+def test_the_number_of_people_is_the_one_approved_under(store, people, computed_folder,
+                                                        bench_readings, monkeypatch):
+    services.set_settings(store, people["admin"], min_people="2")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    with pytest.raises(GonioError, match="wait for their issue"):
+        services.set_settings(store, people["admin"], min_people="3")
+    services.set_settings(store, people["admin"], min_people="2")      # unchanged: fine
+    assert run_issue(store, monkeypatch).min_people == 2
+    services.set_settings(store, people["admin"], min_people="3")
+
+
+def test_people_are_told_apart_by_their_names(store, people):
+    services.update_user(store, None, "tech", full_name="Alice Smith")
+    for name in ("Alice Smith", " alice   SMITH ", "rev2"):
+        with pytest.raises(GonioError, match="on certificates already"):
+            services.update_user(store, None, "rev", full_name=name)
+    with pytest.raises(GonioError, match="'tech' is named 'Alice Smith'"):
+        services.create_user(store, None, "alice2", "correct horse battery", "reviewer",
+                             full_name="ALICE SMITH")
+    with pytest.raises(GonioError, match="on certificates already"):
+        services.create_user(store, None, "alice smith".replace(" ", "."), "x" * 12,
+                             "reviewer", full_name="rev")
+    services.update_user(store, None, "rev", full_name="Alice Smythe")
+
+
+def test_a_backup_never_replaces_the_records_own_files(sqlite_store, tmp_path):
+    from .conftest import make_people
+
+    make_people(sqlite_store)
+    db = sqlite_store.engine.url.database
+    before = open(db, "rb").read()[:100]
+    for target in (db, db + "-wal", sqlite_store.blob_root / "ab"):
+        with pytest.raises(GonioError, match="replace the records' own file"):
+            backup.backup(sqlite_store, target)
+    assert open(db, "rb").read()[:100] == before and backup.verify(sqlite_store)[1] == []
+    assert backup.backup(sqlite_store, tmp_path / "b.zip")["users"] == 4
+
+
+def test_the_link_to_the_readings_is_checked(store, people, computed_folder, bench_readings,
+                                             monkeypatch):
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    other, _ = services.store_file(store, open(bench_readings[1], "rb"))
+    with store.writing() as s:
+        s.execute(text("UPDATE calibrations SET readings_sha256 = :v WHERE id = :i"),
+                  {"v": other, "i": cal.id})
+        s.commit()
+    with pytest.raises(GonioError, match="computed from the readings .* not from the "
+                                         "calibration's stored readings"):
+        services.review(store, people["rev"], cal.id, accept=True)
+    assert any("not from the calibration's stored readings" in p
+               for p in backup.verify(store)[1])
