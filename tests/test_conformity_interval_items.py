@@ -489,3 +489,71 @@ def test_printed_numbers_never_contradict_the_decision(r):
             assert (c.outcome == "pass") == (float(st_hi) <= float(acc)), (hi, mpe, st_hi, text)
             seen.add(c.outcome)
     assert seen == {"pass", "fail"}
+
+
+def outcome_item(value: float, lo: float, hi: float) -> Result:
+    """JJF 7.2.6's threshold stated by its outcome distribution's interval [lo, hi], the
+    value its grid's outcome (on the interval's upper end as often as not: U = hi − value
+    may be 0)."""
+    unc = Uncertainty([], 0.01, hi - value, None, None, None, 0.982, "rule-outcome",
+                      (lo, hi))
+    return Result("jjf1535-2015", "JJF", {"threshold": Item(
+        "threshold", "threshold", "7.2.6", "°/s", value, uncertainty=unc,
+        nonnegative=True)}, {}, {})
+
+
+@pytest.mark.parametrize("rule", RULES)
+@pytest.mark.parametrize("upper,outcome", [(0.04, "fail"), (0.1, "pass"), (0.05, "pass")])
+def test_a_value_on_its_interval_s_upper_end_is_decided(rule, upper, outcome):
+    """The value 0.050 on its interval [0.020, 0.050]'s upper end (U = 0): decided on the
+    interval, by hand — ≤ 0.04 fails (the value above the limit; under the non-binary rule a
+    conditional fail: the interval still reaches into the tolerance, ILAC-G8 4.2.3), ≤ 0.1
+    passes every rule (r = 1: the interval within it), ≤ 0.05 passes (the interval's upper
+    end on the limit). Before, U = 0 read as 'no expanded uncertainty to decide with' and no
+    decision was made."""
+    c, = decide_items(outcome_item(0.05, 0.02, 0.05), [{"item": "threshold", "upper": upper}],
+                      {"rule": rule, "guard_band_factor": 1.0})
+    if rule == "non-binary" and outcome == "fail":
+        outcome = "conditional fail"
+    assert c.outcome == outcome, c
+
+
+def test_a_degenerate_interval_is_not_decided():
+    """An interval of no width states nothing to decide with (no decision, said so)."""
+    c, = decide_items(outcome_item(0.05, 0.05, 0.05), [{"item": "threshold", "upper": 0.1}],
+                      {"rule": "simple"})
+    assert c.outcome is None
+
+
+def test_the_jjf_threshold_and_resolution_are_decided_end_to_end(tmp_path, capsys):
+    """A JJF programme of the virtual bench with limits on the threshold and the resolution:
+    both are decided in results.json and summary.txt, each as its stated interval says
+    (computed here from the stated ends, not by gonio's rule)."""
+    from gonio.cli import main
+    from tests.test_rate_dcc import _simulate
+
+    _, proto, path, _ = _simulate("jjf1535-2015", tmp_path, 5)
+    assert main(["calibrate", str(path), "--protocol", str(proto), "--out",
+                 str(tmp_path / "out")]) == 0
+    items = json.loads((tmp_path / "out" / "results.json").read_text())["items"]
+    limits = {}
+    for key in ("threshold", "resolution"):
+        lo, hi = items[key]["uncertainty"]["interval"]
+        assert hi > lo
+        limits[key] = (hi + (hi - lo), "pass") if key == "threshold" else (lo / 2, "fail")
+    lab = tmp_path / "lab.toml"
+    lab.write_text((protocols_dir() / "lab-example.toml").read_text(encoding="utf-8").split(
+        "[decision_rule]")[0] + '[identity]\non_mismatch = "proceed"\n'
+        '[decision_rule]\nrule = "simple"\nagreed = "test"\n' + "".join(
+        f'[[specification_limits]]\nitem = "{k}"\nupper = {v[0]!r}\nsource = "test"\n'
+        for k, v in limits.items()), encoding="utf-8")
+    capsys.readouterr()
+    code = main(["calibrate", str(path), "--protocol", str(proto), "--out",
+                 str(tmp_path / "lab"), "--lab", str(lab)])
+    if code != 0:
+        pytest.fail(capsys.readouterr().err)
+    items = json.loads((tmp_path / "lab" / "results.json").read_text())["items"]
+    summary = (tmp_path / "lab" / "summary.txt").read_text()
+    for key, (_, outcome) in limits.items():
+        assert items[key]["conformity"]["outcome"] == outcome, items[key]["conformity"]
+        assert re.search(rf"{key}: limits ≤ .*\(simple\): {outcome}\b", summary), summary

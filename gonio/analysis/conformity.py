@@ -406,6 +406,31 @@ NON_NORMAL_K_DECIDED: dict[str, str] = {
 NON_NORMAL_K_SOURCES: tuple[str, ...] = ("jcgm101-convolution",)
 
 
+def decidable(unc) -> bool:
+    """Whether an item's uncertainty states something to decide with: an item stated by its
+    interval alone (no k) an interval of positive, finite width — its value may sit on an
+    end, as a rule outcome on its grid does, so its U (the reach above the value) may be 0 —;
+    an item stated y ± U a positive, finite U.
+
+    >>> from gonio.result.model import Uncertainty
+    >>> decidable(Uncertainty([], 0.01, 0.0, None, None, None, 0.98, "rule-outcome",
+    ...                       (0.02, 0.05)))
+    True
+    >>> decidable(Uncertainty([], 0.0, 0.0, None, None, None, 0.95, "chi-square", (0.0, 0.0)))
+    False
+    >>> decidable(Uncertainty([], 0.05, 0.1, 2.0, None)), decidable(None)
+    (True, False)
+    """
+    if unc is None:
+        return False
+    if unc.k is None:
+        if unc.interval is None:
+            return False
+        lo, hi = (float(x) for x in unc.interval)
+        return math.isfinite(lo) and math.isfinite(hi) and hi > lo
+    return unc.U is not None and math.isfinite(unc.U) and unc.U > 0
+
+
 def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
              magnitude: bool) -> Conformity:
     """The decision of a measured item with U (:func:`decide_items`)."""
@@ -785,8 +810,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
         unc = it.uncertainty
         if not it.measured or it.value is None:
             c = _undecided(key, bounds, rule, origin, "not measured: " + (it.reason or ""))
-        elif (unc is None or unc.U is None or not unc.U > 0 or not math.isfinite(unc.U)
-              or (unc.k is None and unc.interval is None)):
+        elif not decidable(unc):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
             c = _decided(key, it, bounds, rule, origin, magnitude)
