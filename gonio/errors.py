@@ -185,15 +185,27 @@ def check_near_miss(given, known, *, what: str, file, line=None) -> None:
     gonio.errors.GonioError: r.csv: key latitude_dge: unknown metadata key, did you mean 'latitude_deg'? (a misspelt key is never ignored)
     >>> check_near_miss(["operator", "latitude_deg"], ["latitude_deg"], what="metadata key",
     ...                 file="r.csv")
+
+    A known name in another case is refused too, whether or not the file also gives it
+    (``SERIAL`` beside ``serial`` would be kept aside, never compared):
+
+    >>> check_near_miss(["serial", "SERIAL"], ["serial"], what="metadata key", file="r.csv")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: r.csv: key SERIAL: unknown metadata key, did you mean 'serial'? (a misspelt key is never ignored)
     """
     import difflib
 
     given = list(given)
-    absent = [k for k in known if k not in given]
+    known = list(known)
+    folded = {k.casefold(): k for k in known}
+    absent = {k.casefold(): k for k in known if k not in given}
     for name in given:
         if name in known:
             continue
-        m = difflib.get_close_matches(name, absent, n=1, cutoff=NEAR_MISS)
+        m = ([folded[name.casefold()]] if name.casefold() in folded else
+             [absent[x] for x in difflib.get_close_matches(name.casefold(), list(absent), n=1,
+                                                           cutoff=NEAR_MISS)])
         if m:
             where = {"key": name} if "key" in what else {"column": name}
             raise GonioError(f"unknown {what}, did you mean {m[0]!r}? (a misspelt "

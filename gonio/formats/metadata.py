@@ -23,6 +23,11 @@ KNOWN_METADATA: tuple[str, ...] = (
     "gyro_type", "sf_temperature_coeff_bound_ppm_per_c", "thermometer_mpe_c",
     "static_record",
 )
+#: The readings' metadata keys that state the instrument's identity and the conditions, which
+#: a laboratory file is compared with (:mod:`gonio.pipeline.identity`): every readings format
+#: knows them, so a misspelt or wrongly cased one is refused, never kept aside uncompared.
+IDENTITY_METADATA: tuple[str, ...] = ("serial", "model", "manufacturer", "gyro_type",
+                                      "temperature_c", "room_temperature_c", "humidity_pct")
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability
 # (1e-50 .. 1e50 where a number divides or scales data), not from the instruments one has in

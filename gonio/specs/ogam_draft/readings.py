@@ -44,7 +44,8 @@ import pandas as pd
 from gonio.atomic import write_text
 from gonio.errors import (GonioError, MissingColumnError, check_header, check_near_miss,
                           read_utf8)
-from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
+from gonio.formats.metadata import (IDENTITY_METADATA, KNOWN_METADATA,  # noqa: F401
+                                    NUMERIC_METADATA, metadata_bool,
                                     comment_body, is_comment, metadata_float, metadata_gyro_type,
                                     parse_number)
 from gonio.formats.metadata import show_value as _show
@@ -208,7 +209,8 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     for key in metadata:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
-    check_near_miss(metadata, KNOWN_METADATA, what="metadata key", file=fname)
+    check_near_miss(metadata, (*KNOWN_METADATA, *IDENTITY_METADATA), what="metadata key",
+                    file=fname)
     metadata_gyro_type(metadata, file=fname)
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
