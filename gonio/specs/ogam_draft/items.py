@@ -613,7 +613,9 @@ def repeatability(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = 
     Examples
     --------
     Point 1: E = 0.36, 0.72″ → R_1 = 0.36/√2; point 2: −1.08, −0.36″ →
-    R_2 = 0.72/√2 = 0.509…″ = R.
+    R_2 = 0.72/√2 = 0.509…″ = R. Series that agree to the last digit at every point are no
+    repeatability measurement (a copied or filled column): not measured, said why, never
+    R = 0.
 
     >>> df = pd.DataFrame({"test": ["angle_deviation"] * 4, "series": [1, 2, 1, 2],
     ...     "round": [1, 1, 2, 2], "rate_dps": [60.0] * 4, "orientation": ["up"] * 4,
@@ -644,6 +646,10 @@ def repeatability(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = 
     unused = {int(l): f"angle_deviation round {r} has one series only, no repeatability"
               for l, r in zip(long["line"][alone], long["round"][alone])}
     r = table["R_arcsec"].to_numpy(dtype=float)
+    if not np.nanmax(r) > 0:
+        return _not_measured(name, "the series agree to the last digit at every point (a "
+                             "copied or filled column, or readings rounded coarser than their "
+                             "scatter): R would be certified as 0")
     at = int(np.nanargmax(r))
     details = {"position_deg": float(table["position_deg"][at]), "n_series": n_series}
     details.update(_k_details(rows, scale_factor_counts_per_deg))
