@@ -45,3 +45,7 @@ def test_series_equal_to_the_count_are_no_repeatability(shared_simulation, tmp_p
     csv_row = [x for x in (tmp_path / "out" / "tables" / "items.csv").read_text().splitlines()
                if x.startswith("repeatability,")][0]
     assert "0.0" not in csv_row.split(",")[2:4], csv_row
+    assert main(["calibrate", str(folder / "readings.csv"), "--protocol", SMALL, "--out",
+                 str(tmp_path / "zh"), "--lang", "zh"]) == 0
+    html = (tmp_path / "zh" / "certificate.html").read_text(encoding="utf-8")
+    assert "R 将被定为 0" in html and "R would be certified as 0" not in html

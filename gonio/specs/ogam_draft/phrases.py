@@ -270,6 +270,9 @@ REASONS_ZH: tuple[tuple[str, str], ...] = (
      "angle_deviation 数据行"),
     (r"repeatability needs at least 2 angle_deviation series, file has 1",
      "重复性至少需要 2 组 angle_deviation 数据，文件只有 1 组"),
+    (r"the series agree to the last digit at every point \(a copied or filled column, or "
+     r"readings rounded coarser than their scatter\): R would be certified as 0",
+     "各测量点各组读数末位完全相同（复制或填充的列，或读数的舍入粗于其分散）：R 将被定为 0"),
     (r"no (\w+) rows at (.+)", "没有 {2} 下的 {1} 数据行"),
     (r"no reference condition \((.+)\): neither (\w+) nor angle_deviation rows there",
      "没有参考条件（{1}）：该条件下既无 {2} 也无 angle_deviation 数据行"),
