@@ -175,6 +175,9 @@ LABELS: dict[str, dict[str, str]] = {
     "west": {"en": "west", "zh": "正西"},
     # the expanded uncertainty with its k and p (a DCC text of every specification)
     "U_cell": {"en": "{U} (k = {k}, p {r} {p} %)", "zh": "{U}（k = {k}，p {r} {p} %）"},
+    # k = t_p(ν_eff): the ν it was computed from beside it (the one statement rule's ν)
+    "U_cell_nu": {"en": "{U} (k = {k}, ν_eff = {nu}, p {r} {p} %)",
+                  "zh": "{U}（k = {k}，ν_eff = {nu}，p {r} {p} %）"},
     # where the coverage factor k comes from
     "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
                           "degrees of freedom (shown per item in the budgets below); {clause}.",

@@ -161,7 +161,8 @@ def stated_item(res: dict, name: str) -> dict:
     """Item ``name`` as every output states it.
 
     Keys: ``measured``, ``reason``, ``clause``, ``unit``, ``value`` (Num; E as ± max|E_i|),
-    ``signed`` and ``position`` (E only, Num), ``U``, ``k`` (Num or None), ``p`` (text such
+    ``signed`` and ``position`` (E only, Num), ``U``, ``k`` (Num or None), ``nu`` (the ν_eff
+    beside k where the one statement rule states it: Num or None), ``p`` (text such
     as "95", or None), ``U_raw`` (float or None), ``interval`` (the item's
     :func:`~gonio.report.stated.item_nums` when it is stated by its coverage interval alone —
     a dispersion such as B_s and R, or a non-negative item whose U exceeds its value —, then
@@ -174,8 +175,8 @@ def stated_item(res: dict, name: str) -> dict:
     item = res["items"][name]
     out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
            "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
-           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None,
-           "interval": None, "below_zero": False}
+           "position": None, "U": None, "k": None, "nu": None, "p": None, "U_raw": None,
+           "upper": None, "interval": None, "below_zero": False}
     if not item["measured"]:
         return out
     unc = item_uncertainty(res, name)
@@ -224,6 +225,8 @@ def stated_item(res: dict, name: str) -> dict:
             return out
         out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
+        # the ν_eff k = t_p(ν_eff) was computed from, where the one statement rule states it
+        out["nu"] = own["nu"] if own is not None and out["k"] is not None else None
     return out
 
 
@@ -427,6 +430,9 @@ def u_cell(st: dict, L: dict) -> list | str:
     relation sign, :func:`~gonio.result.statement.p_relation`)."""
     if st["U"] is None:
         return "—"
+    if st.get("nu") is not None:
+        return segments(L["U_cell_nu"], U=st["U"], k=st["k"] or "—", nu=st["nu"],
+                        p=st["p"] or "—", r=p_relation(st["p"]))
     return segments(L["U_cell"], U=st["U"], k=st["k"] or "—", p=st["p"] or "—",
                     r=p_relation(st["p"]))
 
@@ -557,7 +563,8 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
         if st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
-        U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
+        nu = f"ν_eff = {st['nu']}, " if st.get("nu") is not None else ""
+        U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, {nu}" \
                                          f"p {p_relation(st['p'])} {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
