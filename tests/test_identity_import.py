@@ -64,3 +64,7 @@ def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tm
                    "--out", tmp_path / "flagged")
     gonio(*imp, "--lab", proceed, tmp_path / "flagged", cwd=tmp_path)   # its own process
     assert _calibrations(data) == 1
+    # recorded under the laboratory file's serial: the issued certificate names what the
+    # command line's certificate and its finding name (not the readings' serial)
+    with sqlite3.connect(data / "records.sqlite3") as db:
+        assert [r[0] for r in db.execute("select serial from instruments")] == [LAB_SERIAL]

@@ -20,7 +20,7 @@ import json
 import tempfile
 from pathlib import Path
 
-from sqlalchemy import select
+from sqlalchemy import func, select
 
 from gonio.errors import GonioError
 from gonio.records import blobs, services
@@ -56,12 +56,35 @@ def _identity(meta: dict) -> tuple[str, str, str]:
             field("serial") or "(unknown serial)")
 
 
+def folded(text: str) -> str:
+    """A name as compared for identity: case and spacing folded, as the laboratory file is
+    compared with the readings (:mod:`gonio.pipeline.identity`).
+
+    >>> folded("  RLG-0001 ") == folded("rlg-0001"), folded("Gyro  Works") == "gyro works"
+    (True, True)
+    """
+    return " ".join(str(text).split()).casefold()
+
+
 def registered_instrument(s, meta: dict) -> Instrument | None:
-    """The registered instrument the readings' metadata ``meta`` name, or None."""
+    """The registered instrument the readings' metadata ``meta`` name, or None: the one of
+    the same manufacturer, model and serial, else the one they name with case and spacing
+    folded (:func:`folded`: ``rlg-0001`` is the registered ``RLG-0001``, whose gyro type and
+    customer then hold, never a second registration of one instrument)."""
     manufacturer, model, serial = _identity(meta)
-    return s.scalar(select(Instrument).where(Instrument.manufacturer == manufacturer,
+    same = s.scalar(select(Instrument).where(Instrument.manufacturer == manufacturer,
                                              Instrument.model == model,
                                              Instrument.serial == serial))
+    if same is not None:
+        return same
+    want = (folded(manufacturer), folded(model), folded(serial))
+    found = [i for i in s.scalars(select(Instrument).where(
+        func.lower(Instrument.serial) == serial.lower()).order_by(Instrument.id))
+        if (folded(i.manufacturer), folded(i.model), folded(i.serial)) == want]
+    if not found:
+        found = [i for i in s.scalars(select(Instrument).order_by(Instrument.id))
+                 if (folded(i.manufacturer), folded(i.model), folded(i.serial)) == want]
+    return found[0] if found else None
 
 
 def _instrument(s, meta: dict, spec_key: str, customer: str, actor) -> Instrument:
@@ -282,7 +305,7 @@ def lab_environment(details: dict) -> dict:
 
 
 def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | None,
-                    res_path: Path, option_paths=()) -> None:
+                    res_path: Path, option_paths=()) -> dict:
     """The readings ``rd`` (and the files they name as part of their data, and those an
     option gave, ``option_paths``: ``--thermal FILE``, ``--tilt FILE``) against the
     laboratory file ``lab`` and the registered instrument's ``record`` as ``gonio calibrate``
@@ -290,7 +313,10 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
     (:func:`gonio.pipeline.identity.check_identity`): a contradiction is refused (one line)
     unless the laboratory file proceeds, and then results.json must state it (a folder computed
     without this laboratory file, or before the instrument's record said otherwise, states
-    none: calibrate it again)."""
+    none: calibrate it again). Returns the identity the certificate states where the
+    laboratory file proceeds past a contradiction of the readings' serial, model or
+    manufacturer: ``{metadata key: the laboratory file's value}`` (:func:`lab_identity`), else
+    {}."""
     from gonio.pipeline.dispatch import load_lab_file, named_files
     from gonio.pipeline.identity import MISMATCH_CODE, check_identity
     from gonio.specs import get
@@ -298,7 +324,7 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
     named += [Path(p) for p in option_paths if Path(p).resolve() not in
               {n.resolve() for n in named}]      # --thermal FILE, --tilt FILE: the same checks
     if lab is None and record is None and not named:
-        return
+        return {}
     details = load_lab_file(lab, get(spec_key)) if lab is not None else None
     found = check_identity(rd, details, lab_file=lab, record=record, named=named,
                            temperature_keys=get(spec_key).room_temperature_keys)
@@ -309,6 +335,29 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
         raise GonioError(f"{missing[0].split(';')[0]}: results.json does not state this "
                          "contradiction (computed without this laboratory file or record); "
                          "calibrate the readings again with it", file=res_path, key="identity")
+    return lab_identity(details, {str(f.subject) for f in found})
+
+
+#: The contradicted identity fields (a finding's subject) whose laboratory file value the
+#: certificate states where the laboratory proceeds: its ``[instrument]`` key.
+LAB_IDENTITY = {"serial": "serial", "model": "model", "manufacturer": "manufacturer"}
+
+
+def lab_identity(details: dict | None, contradicted: set[str]) -> dict:
+    """The laboratory file's ``[instrument]`` values of the ``contradicted`` identity fields
+    (:data:`LAB_IDENTITY`), as the readings' metadata keys: the instrument the records
+    register the calibration under, so that the issued certificate names what the command
+    line's certificate and its finding ("the certificate's identity and conditions are the
+    laboratory file's") name.
+
+    >>> lab_identity({"instrument": {"serial": "RLG-0002", "model": "M"}}, {"serial"})
+    {'serial': 'RLG-0002'}
+    >>> lab_identity(None, {"serial"}), lab_identity({"instrument": {}}, {"temperature"})
+    ({}, {})
+    """
+    inst = (details or {}).get("instrument") or {}
+    return {key: str(inst[key]) for what, key in LAB_IDENTITY.items()
+            if what in contradicted and str(inst.get(key) or "").strip()}
 
 
 def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
@@ -714,7 +763,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     given = [p for option, _, p in option_inputs(get(key), check_manifest(folder), res_path, rd,
                                                  option_files)
              if option in INSTRUMENT_FILE_OPTIONS]   # checked like the files the readings name
-    _check_identity(rd, lab, key, results, record, res_path, given)
+    meta = {**meta, **_check_identity(rd, lab, key, results, record, res_path, given)}
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
     psha = None

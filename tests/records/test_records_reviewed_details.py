@@ -197,3 +197,22 @@ def test_the_link_to_the_readings_is_checked(store, people, computed_folder, ben
         services.review(store, people["rev"], cal.id, accept=True)
     assert any("not from the calibration's stored readings" in p
                for p in backup.verify(store)[1])
+
+
+def test_a_serial_in_another_case_is_the_registered_instrument(store, people):
+    """Readings naming ``rlg-0001`` are of the registered RLG-0001 (case and spacing folded, as
+    the laboratory file is compared): its gyro type and customer hold, never a second
+    registration of one instrument."""
+    from gonio.records.importer import registered_instrument
+
+    from .test_records_services import setup_instrument
+
+    inst, _ = setup_instrument(store, people)
+    with store.session() as s:
+        for meta in ({"serial": "rlg-0001", "manufacturer": "example gyro works",
+                      "model": "RLG-GM-1"},
+                     {"serial": " RLG-0001", "manufacturer": "Example  Gyro Works",
+                      "model": "rlg-gm-1"}):
+            assert registered_instrument(s, meta).id == inst.id, meta
+        assert registered_instrument(s, {"serial": "RLG-0002", "manufacturer":
+                                         "Example Gyro Works", "model": "RLG-GM-1"}) is None
