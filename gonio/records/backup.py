@@ -72,6 +72,11 @@ def backup(store, path: str | os.PathLike) -> dict:
     if bad:
         raise GonioError(f"{len(bad)} stored file(s) missing or damaged, first {bad[0]}: "
                          "nothing written (gonio db verify lists them)", file=path)
+    _, problems = verify(store, files=False)
+    if problems:      # an archive of them would be refused by restore: said now, not then
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise GonioError(f"the records do not verify: {problems[0]}{more}; nothing written "
+                         "(gonio db verify lists them)", file=path)
     fd, tmp = tempfile.mkstemp(prefix=".backup-", suffix=".zip", dir=path.parent or ".")
     os.close(fd)
     try:
@@ -519,6 +524,7 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
             _put_blob(store.blob_root, sha_file, zf, path)
     _fill_stated(store, rows)
     who = actor.username if actor is not None else "(command line)"
+    _restored_records_verify(store, rows, path, dict(event), who)
     if not replace:
         with store.writing() as s:
             _still_no_user(s, path)
@@ -531,6 +537,34 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
     counts = {k: len(v) for k, v in rows.items() if v}
     counts["files"] = len(names)
     return counts
+
+
+def _restored_records_verify(store, rows: dict, path: Path, event: dict, who: str) -> None:
+    """The archive's records as they would be restored verify (:func:`verify`: every seal
+    signed, every result row against its results.json, the rows' consistency): they are
+    written first into a scratch SQLite store in a temporary folder whose blob store is this
+    store's (the archive's files are in it already), and checked there. A problem is a
+    GonioError naming it and the number of others: nothing restored (an archive whose result
+    row was changed, or whose certificate or audit rows were taken out, restored with exit 0
+    before and only a later verify saw it, or nothing did)."""
+    from gonio.records.db import open_store
+
+    with tempfile.TemporaryDirectory(prefix="gonio-restore-check-") as tmp:
+        data = Path(tmp) / "data"
+        data.mkdir()
+        os.symlink(os.path.realpath(store.blob_root), data / "blobs")
+        scratch = open_store(None, data)
+        try:
+            with scratch.writing() as s:
+                _write(s, rows, path, event, who, own=_set_aside(s))
+                s.commit()
+            _, problems = verify(scratch)
+        finally:
+            scratch.close()
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise GonioError(f"the archive's records do not verify: {problems[0]}{more}; nothing "
+                         "restored", file=path)
 
 
 def _still_no_user(s, path: Path) -> None:
@@ -849,13 +883,15 @@ def _replace_postgresql(store, rows: dict, path: Path, event: dict, who: str) ->
     store.engine.dispose()
 
 
-def verify(store) -> tuple[dict, list[str]]:
+def verify(store, files: bool = True) -> tuple[dict, list[str]]:
     """Check a live database as a backup and a restore check an archive: every stored file
     present and matching its SHA-256, every computed calibration's result rows matching its
     stored results.json and, where it was signed, its seal the one signed (at review, at
     approval, on its newest certificate), and a reviewed or approved calibration's details
-    the ones its reviewed draft states (:func:`gonio.records.services.details_changed`).
-    Returns (counts, problems: one line each)."""
+    the ones its reviewed draft states (:func:`gonio.records.services.details_changed`), and
+    the rows' consistency (:func:`consistency_problems`); ``files`` False leaves out the
+    stored files' digests (checked by the caller). Returns (counts, problems: one line
+    each)."""
     from gonio.records import services
     from gonio.records.models import Calibration, Certificate
 
@@ -867,7 +903,8 @@ def verify(store) -> tuple[dict, list[str]]:
             Calibration.results_sha256.is_not(None)).order_by(Calibration.id)).all()
         certs = s.execute(select(Certificate.calibration_id, Certificate.number,
                                  Certificate.seal_sha256).order_by(Certificate.id)).all()
-    problems += [f"stored file {b}" for b in damaged_files(store, shas)]
+    if files:          # (``files`` False: the caller checked every stored file already)
+        problems += [f"stored file {b}" for b in damaged_files(store, shas)]
     newest = {cid: (number, sealed) for cid, number, sealed in certs}
     for cid, status, reviewed, approved in cals:
         try:
@@ -886,4 +923,39 @@ def verify(store) -> tuple[dict, list[str]]:
         if status in ("reviewed", "issuing"):     # what was reviewed is what is approved
             problems += [f"calibration {cid}: {line}"
                          for line in services.details_changed(store, cid)]
+    problems += consistency_problems(store)
     return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems
+
+
+def consistency_problems(store) -> list[str]:
+    """What the records' rows say of each other that cannot be (one line each): an issued
+    calibration without a certificate; a year's certificate counter behind a number issued
+    or reserved in that year (the next approval would use it again); a certificate whose
+    approver created the calibration it first certifies (ISO/IEC 17025 7.8.1.1: refused on
+    every path, so such a row was written around the records)."""
+    from gonio.records.models import Calibration, Certificate, CertificateCounter
+
+    out = []
+    with store.session() as s:
+        issued = set(s.scalars(select(Certificate.calibration_id)))
+        for cid in s.scalars(select(Calibration.id).where(Calibration.status == "issued")
+                             .order_by(Calibration.id)):
+            if cid not in issued:
+                out.append(f"calibration {cid}: issued, and no certificate of it is recorded")
+        last = dict(s.execute(select(CertificateCounter.year, CertificateCounter.last)).all())
+        numbers = list(s.scalars(select(Certificate.number))) + [
+            n for n in s.scalars(select(Calibration.pending_number)) if n]
+        for number in sorted(numbers):
+            m = re.fullmatch(r"[A-Z]+-(\d{4})-(\d+)", number)
+            if m and int(m.group(2)) > last.get(int(m.group(1)), 0):
+                out.append(f"certificate {number}: beyond the {m.group(1)} counter "
+                           f"({last.get(int(m.group(1)), 0)}): the next approval would "
+                           "number another certificate the same")
+        for number, approver, creator in s.execute(
+                select(Certificate.number, Certificate.issued_by_id, Calibration.created_by_id)
+                .join(Calibration, Calibration.id == Certificate.calibration_id)
+                .where(Certificate.replaces_id.is_(None)).order_by(Certificate.id)):
+            if approver is not None and approver == creator:
+                out.append(f"certificate {number}: approved by the person who created its "
+                           "calibration")
+    return out
