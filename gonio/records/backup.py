@@ -547,20 +547,29 @@ def _restored_records_verify(store, rows: dict, path: Path, event: dict, who: st
     GonioError naming it and the number of others: nothing restored (an archive whose result
     row was changed, or whose certificate or audit rows were taken out, restored with exit 0
     before and only a later verify saw it, or nothing did)."""
+    import sqlite3
+
+    from sqlalchemy.exc import SQLAlchemyError
+
     from gonio.records.db import open_store
 
     with tempfile.TemporaryDirectory(prefix="gonio-restore-check-") as tmp:
         data = Path(tmp) / "data"
         data.mkdir()
         os.symlink(os.path.realpath(store.blob_root), data / "blobs")
-        scratch = open_store(None, data)
         try:
-            with scratch.writing() as s:
-                _write(s, rows, path, event, who, own=_set_aside(s))
-                s.commit()
-            _, problems = verify(scratch)
-        finally:
-            scratch.close()
+            scratch = open_store(None, data)
+            try:
+                with scratch.writing() as s:
+                    _write(s, rows, path, event, who, own=_set_aside(s))
+                    s.commit()
+                _, problems = verify(scratch)
+            finally:
+                scratch.close()
+        except (SQLAlchemyError, sqlite3.Error, OSError) as exc:   # a disk full, say
+            msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
+            raise GonioError(f"the restored records could not be written ({msg}): the live "
+                             "records are unchanged; nothing restored", file=path) from None
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise GonioError(f"the archive's records do not verify: {problems[0]}{more}; nothing "

@@ -306,17 +306,21 @@ def test_backup_refuses_rows_restore_would_refuse(records, tmp_path, capsys):
     """A row SQLite kept with a value its column's type does not take (U = 'abc'): the backup
     is refused with one line naming the row, and no archive or temporary file is left
     (before: exit 0, an archive that restore then refused). SQLite only: PostgreSQL never
-    stores such a row."""
+    stores such a row. The records' verification names it first (the row is not its stored
+    results.json's); the archive's own check would name "result_items row 2: U is not a
+    number"."""
     with records.writing() as s:
-        rid = s.execute(text("SELECT id FROM result_items ORDER BY id LIMIT 1 OFFSET 1")).scalar()
+        rid, was = s.execute(text("SELECT id, U FROM result_items ORDER BY id LIMIT 1 "
+                                  "OFFSET 1")).one()
         s.execute(text("UPDATE result_items SET U = 'abc' WHERE id = :i"), {"i": rid})
         s.commit()
     archive = tmp_path / "b.zip"
     out = cli(["db", "backup", archive, "--data", records.data], capsys, 2)
-    assert "result_items row 2: U is not a number" in out.err and "nothing written" in out.err
+    assert "the records do not verify" in out.err and "differs from the stored results.json" \
+        in out.err and "nothing written" in out.err and "\n" not in out.err.strip()
     assert not archive.exists() and not list(tmp_path.glob(".backup-*"))
     with records.writing() as s:            # the row mended, the backup restores
-        s.execute(text("UPDATE result_items SET U = 0.5 WHERE id = :i"), {"i": rid})
+        s.execute(text("UPDATE result_items SET U = :u WHERE id = :i"), {"u": was, "i": rid})
         s.commit()
     cli(["db", "backup", archive, "--data", records.data], capsys, 0)
     cli(["db", "restore", archive, "--data", tmp_path / "other"], capsys, 0)
