@@ -30,6 +30,7 @@ from lxml import etree
 
 from gonio.cli import main
 from gonio.report.dcc import DCC_NS, SI_NS
+from gonio.result.statement import K_SOURCE_MAX_ABS as MAX_ABS
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
 SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
@@ -431,6 +432,15 @@ def test_items_csv_holds_results_json_numbers(run):
         p = it["uncertainty"].get("p_stated")        # "p ≈ 99.6 %": the p printed
         want = float(number(re.search(_NUM, p).group(0))) if p else raw["p"]
         assert float(row["p"]) * 100 == pytest.approx(want, rel=1e-12), where
+
+
+def test_items_csv_states_no_u_the_certificate_does_not(run):
+    """An extreme of magnitudes stated by its interval (the optical E) has no u in items.csv:
+    the certificate says no combined standard uncertainty of E is certified, and the u_c of
+    the extreme's point (results.json keeps it) is no u of max|E_i|."""
+    for key, it in measured(run["res"]).items():
+        if it["uncertainty"].get("k_source") == MAX_ABS:
+            assert run["csv"][key]["u"] in ("", None), (key, run["csv"][key]["u"])
 
 
 def test_the_parsing_can_fail():
