@@ -198,6 +198,37 @@ def test_the_measured_room_temperature_speaks_where_the_metadata_are_silent(run)
             assert "temperature_c column" in r.stderr and "1 °C apart" in r.stderr, r.stderr
 
 
+def test_the_measured_room_temperature_speaks_beside_an_agreeing_line(run):
+    """A JJF 1535 file whose ``# room_temperature_c`` line agrees with the laboratory file
+    while its room tests logged 7 °C more in ``temperature_c``: refused naming the column
+    (before, the metadata line alone was compared and the certificate stated the laboratory
+    file's temperature without a word)."""
+    spec, seed, cal = run
+    if spec != "jjf1535-2015":
+        pytest.skip("only JJF 1535's readings log the room")
+    work = cal.parent
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    lines = (work / "sim" / "readings.csv").read_text(encoding="utf-8").splitlines(True)
+    room = float(next(x for x in lines if x.startswith("# room_temperature_c:")).split(":")[1])
+    head = next(i for i, x in enumerate(lines) if not x.startswith("#"))
+    cols = lines[head].rstrip("\n").split(",")
+    test, temp = cols.index("test"), cols.index("temperature_c")
+    out = lines[:head + 1]
+    for x in lines[head + 1:]:
+        f = x.rstrip("\n").split(",")
+        if f[test] not in ("sf_temperature", "bias_temperature") and f[temp].strip():
+            f[temp] = f"{float(f[temp]) + 7.0:.3f}"
+        out.append(",".join(f) + "\n")
+    warm = work / "logged-warm.csv"
+    warm.write_text("".join(out), encoding="utf-8")
+    lab = lab_file(work, 'on_mismatch = "refuse"', name="agrees.toml", temperature_c=room + 0.1)
+    lab.write_text(re.sub(r"^\[instrument\]\n.*?\n\n", "", lab.read_text(),
+                          flags=re.S | re.M))
+    r = gonio("calibrate", warm, "--spec", spec, *proto, "--lab", lab, "--out",
+              work / "logged-warm", cwd=work, rc=2)
+    assert "temperature_c column" in r.stderr and "1 °C apart" in r.stderr, r.stderr
+
+
 def test_iec_base_temperature_is_not_the_room(run):
     """IEC 62047-20 runs every test in the chamber at a set point: its ``# room_temperature_c``
     is T_BASE (the midpoint of the operating range) and its ``temperature_c`` column logs the

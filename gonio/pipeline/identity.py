@@ -74,13 +74,17 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
     ...                                       {"instrument": {"gyro_type": "RLG"}})]
     ['instrument.gyro_type']
 
-    ``measured``: what the readings measured where their metadata are silent
-    (``{"temperature_c": (text, where)}``, a specification's ``measured_conditions``):
-    compared in place of a missing metadata line, named by ``where``.
+    ``measured``: what the readings measured (``{"temperature_c": (text, where)}``, a
+    specification's ``measured_conditions``): compared as well as the metadata line, and in
+    place of a missing one, named by ``where`` — a logged room temperature that contradicts
+    the laboratory file is one whatever the metadata line says:
 
     >>> [c["where"] for c in contradictions({}, lab, {"temperature_c": ("25.0", "the column")})]
     ['the column']
-    >>> contradictions({"temperature_c": "20.0"}, lab, {"temperature_c": ("25.0", "col")})
+    >>> [c["where"] for c in contradictions({"temperature_c": "20.0"}, lab,
+    ...                                     {"temperature_c": ("25.0", "col")})]
+    ['col']
+    >>> contradictions({"temperature_c": "20.0"}, lab, {"temperature_c": ("20.4", "col")})
     []
 
     ``temperature_keys``: the readings' metadata keys that state the room temperature (a
@@ -105,21 +109,23 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
         if what == "temperature" and temperature_keys is not None:
             md_keys = tuple(temperature_keys)
         theirs = (lab.get(section) or {}).get(key)
-        k, text = _first(metadata, md_keys)
-        where = None
-        if text is None and md_keys and md_keys[0] in (measured or {}):
-            text, where = measured[md_keys[0]]
-        ours = parse_number(text) if text is not None else None
-        if theirs is None or ours is None or not math.isfinite(ours):
+        if theirs is None:
             continue
+        k, text = _first(metadata, md_keys)
+        stated = [(k, text, None)] if text is not None else []
+        if md_keys and md_keys[0] in (measured or {}):    # what the readings measured too
+            stated.append((md_keys[0], *measured[md_keys[0]]))
         default = TEMPERATURE_TOLERANCE_C if what == "temperature" else HUMIDITY_TOLERANCE_PCT
         tol = rules.get(tol_key)
         tol = default if tol is None else float(tol)
-        if abs(float(theirs) - ours) > tol:
-            out.append({"what": what, "key": k or md_keys[0],
-                        "readings": f"{condition_text(text)} {unit}",
+        for k, text, where in stated:
+            ours = parse_number(text)
+            if ours is None or not math.isfinite(ours) or abs(float(theirs) - ours) <= tol:
+                continue
+            out.append({"what": what, "key": k, "readings": f"{condition_text(text)} {unit}",
                         "lab": f"{condition_text(theirs)} {unit}", "lab_key": f"{section}.{key}",
                         "tolerance": f"{tol:g} {unit}", **({"where": where} if where else {})})
+            break                     # one contradiction of the lab file's value: the first
     return out
 
 
@@ -257,7 +263,8 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
     record: no contradiction gives ``[]``; one refuses (GonioError naming the readings and
     the key) unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged
     findings are returned for the result. ``measured(readings)``: what the readings measured
-    of their conditions, compared where their metadata are silent (a specification's
+    of their conditions, compared beside their metadata and in place of a missing line (a
+    specification's
     ``measured_conditions``; :func:`contradictions`); ``temperature_keys``: the metadata keys
     that state the room temperature (a specification's ``room_temperature_keys``)."""
     md = readings_metadata(readings) if lab or record or named else {}
