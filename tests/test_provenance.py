@@ -566,3 +566,17 @@ def test_a_stream_without_its_bench_lines_is_marked(fmt, tmp_path):
     first = (cal / "summary.txt").read_text(encoding="utf-8").splitlines()[0]
     assert first.startswith("VIRTUAL BENCH EXAMPLE") and "watermark" in first
     assert 'id="virtual-bench"' in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    # reduced to readings by gonio reduce: the readings carry the mark too (before, the
+    # reduced readings of a stream without its lines were a clean laboratory file)
+    red = tmp_path / "reduced.csv"
+    gonio("reduce", dst, "--protocol", PINS / "ogam-draft-small.toml", "--out", red,
+          cwd=tmp_path)
+    assert "virtual" not in red.read_text(encoding="utf-8").lower()
+    cal = tmp_path / "cal-reduced"
+    gonio("calibrate", red, "--spec", "ogam-draft", "--protocol", PINS / "ogam-draft-small.toml",
+          "--lab", lab_file(tmp_path, 'on_mismatch = "proceed"'), "--dcc", "--out", cal,
+          cwd=tmp_path)
+    prov = json.loads((cal / "results.json").read_text(encoding="utf-8"))["provenance"]
+    assert prov["virtual"] is True and prov["evidence"] == ["watermark"], prov
+    assert all(BANNER in t for t in pdf_pages(cal / "certificate.pdf"))
+    assert 'id="virtual-bench"' in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")

@@ -178,7 +178,17 @@ def run_reduce(args) -> int:
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream "
                          f"({len(red.rests)} rests found)", file=args.stream)
-    write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]), args.out, red.metadata)
+    reduced = red.readings.drop(columns=["t_zero_s", "t_read_s"])
+    from gonio.formats.provenance import file_provenance
+    if file_provenance(args.stream)["virtual"]:
+        # the virtual bench's stream (by its lines or by its watermark): its readings carry
+        # the mark too, whatever lines were deleted (docs/formats.md#watermark)
+        from gonio.atomic import write_text
+        from gonio.formats.watermark import mark_text
+        from gonio.specs.ogam_draft.readings import format_readings
+        write_text(args.out, mark_text(format_readings(reduced, red.metadata)))
+    else:
+        write_readings(reduced, args.out, red.metadata)
     if args.json:
         d = red.to_dict()
         d["out"] = str(args.out)
