@@ -629,34 +629,32 @@ def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire
     return obj
 
 
-#: The fields of a customer, an instrument and a standard that a certificate states.
+#: The fields of a customer and an instrument that a certificate states. A standard's are
+#: not among them: a certificate states each standard as the reviewed draft stated it, when
+#: it was used (its recalibration, a new certificate and accuracy, reaches no calibration
+#: made before; which standards were used changes by an attach only).
 STATED_FIELDS = {"customer": ("name", "address"),
                  "instrument": ("customer_id", "kind", "manufacturer", "model", "serial",
-                                "gyro_type"),
-                 "standard": ("name", "identifier", "accuracy", "certificate", "traceability")}
+                                "gyro_type")}
 
 
 def _naming(s: Session, entity: str, obj_id: int) -> list:
-    """The calibrations whose certificate names the customer, instrument or standard
-    ``obj_id`` and is not yet issued: those still open to a change of their details
-    (:data:`ATTACHABLE`) and those approved and waiting for their issue (a reserved
-    number)."""
+    """The calibrations whose certificate names the customer or instrument ``obj_id`` and is
+    not yet issued: those still open to a change of their details (:data:`ATTACHABLE`) and
+    those approved and waiting for their issue (a reserved number)."""
     q = select(Calibration).where(Calibration.status.in_(ATTACHABLE)
                                   | (Calibration.pending_number != ""))
     if entity == "instrument":
         q = q.where(Calibration.instrument_id == obj_id)
-    elif entity == "customer":
+    else:
         q = q.join(Instrument, Instrument.id == Calibration.instrument_id).where(
             Instrument.customer_id == obj_id)
-    else:
-        q = q.join(CalibrationStandard, CalibrationStandard.calibration_id == Calibration.id
-                   ).where(CalibrationStandard.standard_id == obj_id)
     return list(s.scalars(q.order_by(Calibration.id).with_for_update()))
 
 
 def _stated_change(s: Session, actor: User, entity: str, obj_id: int, before: dict,
                    after: dict) -> None:
-    """A change of what certificates state of a customer, an instrument or a standard
+    """A change of what certificates state of a customer or an instrument
     (:data:`STATED_FIELDS`) reaches every calibration naming it that is not yet issued, as an
     attach does (ISO/IEC 17025 7.8.1.1: what is issued is what was checked): a reviewed one
     goes back to its review, one with a stored result has its draft rendered again
@@ -2685,7 +2683,8 @@ def _with_reviewed(lab: dict, drafted: dict) -> dict:
 
 
 def details_changed(store, cal_id: int) -> list[str]:
-    """What the records state now of a calibration (its customer, instrument, standards,
+    """What the records state now of a calibration (its customer, instrument, the standards
+    used — by identifier: a standard's details are stated as when it was used —,
     environment, dates, place: :func:`reviewed_part`) differently from the draft last
     rendered for it (its stored lab.toml, sealed with the result): one line each, e.g.
     ``instrument serial: 'RLG-0001' in the draft, now 'FAKE-9999'``; [] where they agree or
@@ -2704,6 +2703,10 @@ def details_changed(store, cal_id: int) -> list[str]:
     was = reviewed_part(tomllib.loads(file_bytes(store, sha).decode("utf-8")))
     now = reviewed_part(tomllib.loads(lab_toml(lab_details(store, cal_id, final=False,
                                                            redraft=True))))
+
+    def ids(v):        # the standards by which were used (their details: as when used)
+        return sorted(str(x.get("identifier")) for x in v or [])
+    was["standards"], now["standards"] = ids(was["standards"]), ids(now["standards"])
     lines = []
     for section, before in was.items():
         after = now[section]
@@ -2713,9 +2716,7 @@ def details_changed(store, cal_id: int) -> list[str]:
             lines += [f"{section} {k}: {before.get(k)!r} in the draft, now {after.get(k)!r}"
                       for k in sorted(set(before) | set(after)) if before.get(k) != after.get(k)]
         else:
-            def ids(v):
-                return [x.get("identifier") for x in v] if isinstance(v, list) else v
-            lines.append(f"{section}: {ids(before)!r} in the draft, now {ids(after)!r}")
+            lines.append(f"{section}: {before!r} in the draft, now {after!r}")
     return lines
 
 

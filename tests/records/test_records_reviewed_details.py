@@ -55,23 +55,27 @@ def test_an_instrument_edit_after_review_is_reviewed_again(store, people, comput
 def test_an_edit_is_refused_while_an_approved_certificate_waits(what, store, people,
                                                                 computed_folder,
                                                                 bench_readings, monkeypatch):
+    """An instrument or customer edit is refused while an approved certificate waits for its
+    issue; a standard's (its recalibration: a new accuracy) goes through, and the certificate
+    states the standard as the reviewed draft did, when it was used."""
     cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
     tech = people["tech"]
+    if what == "standard":
+        with store.session() as s:
+            sid = s.scalar(text("SELECT standard_id FROM calibration_standards WHERE "
+                                "calibration_id = :c"), {"c": cal.id})
+        services.update_standard(store, tech, sid, accuracy="±99″")
+        assert services.details_changed(store, cal.id) == []
     with pytest.raises(GonioError, match="waits for its issue"):
-        if what == "instrument":
+        if what in ("instrument", "standard"):
             other = services.add_customer(store, tech, "Other Customer Ltd")
             services.update_instrument(store, tech, cal.instrument_id, serial="FAKE-9999",
                                        customer_id=other.id)
-        elif what == "customer":
+        else:
             with store.session() as s:
                 cid = s.scalar(text("SELECT customer_id FROM instruments WHERE id = :i"),
                                {"i": cal.instrument_id})
             services.update_customer(store, tech, cid, name="Other Customer Ltd")
-        else:
-            with store.session() as s:
-                sid = s.scalar(text("SELECT standard_id FROM calibration_standards WHERE "
-                                    "calibration_id = :c"), {"c": cal.id})
-            services.update_standard(store, tech, sid, accuracy="±99″")
     # an edit that no certificate states goes through
     services.update_instrument(store, tech, cal.instrument_id, interval_months=6)
     page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
