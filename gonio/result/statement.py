@@ -951,7 +951,9 @@ def u_c_certified(it) -> bool:
     bound-condition interval — ``details.bound_condition``, or ``uncertainty.k_source``
     "U = a + k·u" (value ± (a + k·u): the equipment's errors at their bounds, a, plus k·u of
     the other lines) or :data:`K_SOURCE_BOUND_CHI2` (a dispersion's one-sided bound
-    condition), or a budget marked ``u_c_certified`` False (U = k·u + b per point).
+    condition), or a budget marked ``u_c_certified`` False (U = k·u + b per point), nor for
+    the interval of an extreme of magnitudes (:data:`K_SOURCE_MAX_ABS`, the optical E: its
+    u_c is that of the extreme's point, no u of max|x_i|).
     Its u_c (the JCGM 100 budget, the bounded lines as rectangular distributions) does not
     hold those errors at their bounds: it is kept in results.json and shown in the budget
     table marked "beside, not stated"; the DCC writes the interval's ends without an
@@ -965,13 +967,16 @@ def u_c_certified(it) -> bool:
     False
     >>> u_c_certified({"u_c_certified": False}), u_c_certified({"u_c_certified": True})
     (False, True)
+    >>> u_c_certified({"uncertainty": {"k_source": K_SOURCE_MAX_ABS}})
+    False
     """
     if _get(it, "u_c_certified", True) is False:
         return False
     if (_get(it, "details") or {}).get("bound_condition"):
         return False
     ks = str(_get(_get(it, "uncertainty"), "k_source") or "")
-    return not (ks.startswith(K_SOURCE_BOUND_PREFIX) or ks == K_SOURCE_BOUND_CHI2)
+    return not (ks.startswith(K_SOURCE_BOUND_PREFIX) or ks in (K_SOURCE_BOUND_CHI2,
+                                                                K_SOURCE_MAX_ABS))
 
 
 #: ``k_source`` of an item whose value is signed but whose statement is the coverage interval

@@ -93,9 +93,9 @@ def item_row(key: str, it) -> dict:
     except GonioError:          # unstateable items are reported not measured (run_items)
         st = None
     # u_c only where the certificate states it (u_c_certified: not the quadrature u_c of a
-    # bound-condition item, which the certificate marks "beside, not stated"; not the u_c of
-    # one point beside the interval of an extreme of magnitudes, which states no u)
-    row.update(u=unc.u_c if u_c_certified(it) and unc.k_source != K_SOURCE_MAX_ABS else None,
+    # bound-condition item, which the certificate marks "beside, not stated", nor the u_c of
+    # one point beside the interval of an extreme of magnitudes)
+    row.update(u=unc.u_c if u_c_certified(it) else None,
                p=stated_p(unc.coverage_probability))
     if st is not None and st.interval is not None:
         if unc.interval is not None:
