@@ -272,9 +272,10 @@ def test_optical_real_looking_readings_are_not_flagged():
     assert ci.low <= 0.05 <= ci.high or small / 400 < 0.05, small
 
 
-def test_detect_reads_no_further_than_it_needs(tmp_path):
-    """A file longer than MAX_CELLS cells is decided on its first MAX_CELLS cells, whatever
-    follows (here bytes that are no CSV at all). (Its memory: benchmarks/watermark_memory.py.)"""
+def test_detect_reads_block_by_block(tmp_path):
+    """A file longer than MAX_CELLS cells is tested block by block: a second block of
+    fewer than MIN_CELLS cells, then bytes that are no CSV at all, change nothing; the
+    first block decides. (Its memory and time: benchmarks/watermark_memory.py.)"""
     from gonio.formats.watermark import MAX_CELLS
     rng = np.random.default_rng(5)
     body = "".join(f"bias,0,{i},record,{i},0,{rng.normal(2500, 1):.2f}\n"   # distinct rows
@@ -283,7 +284,35 @@ def test_detect_reads_no_further_than_it_needs(tmp_path):
     p.write_bytes(("test,run,step,role,time_s,rate_dps,output\n" + body).encode()
                   + b"\xff\x00" * 1000 + b"\n1,2,3\n")
     got = detect(p)
-    assert got["cells"] == MAX_CELLS and not got["virtual"]
+    assert got["cells"] == MAX_CELLS and not got["virtual"] and got["blocks"] == 2
+
+
+def _unmarked_rate_rows(rng, start: int, n: int) -> list[str]:
+    """Real-looking rate rows (times on a 1 ns grid, not marked), distinct contexts."""
+    return [f"bias,0,{i},record,{i + rng.integers(0, 10**9) / 1e9:.9f},0,"
+            f"{rng.normal(2500, 1):.2f}" for i in range(start, start + n)]
+
+
+@pytest.mark.parametrize("n_marked", [3000, 20000])
+def test_marked_rows_after_many_real_ones_are_found(n_marked):
+    """Simulated rows appended after 30 000 real-looking ones (more than one block), or put
+    among them, are found: the block that holds them is tested on its own, not diluted by
+    the file; the real rows alone, and ten other real-looking files of two blocks, are not
+    flagged."""
+    from gonio.formats.watermark import mark_text
+    header = "test,run,step,role,time_s,rate_dps,output"
+    rng = np.random.default_rng(n_marked)
+    real = _unmarked_rate_rows(rng, 0, 30000)
+    fake = _unmarked_rate_rows(rng, 30000, n_marked)
+    marked = mark_text("\n".join([header, *fake]) + "\n").splitlines()[1:]
+    assert marked != fake and len(marked) == n_marked
+    assert not detect_text("\n".join([header, *real]) + "\n")["virtual"]
+    for rows in (real + marked, real[:25000] + marked + real[25000:]):
+        got = detect_text("\n".join([header, *rows]) + "\n")
+        assert got["virtual"] and got["blocks"] >= 2, got
+    flagged = sum(detect_text("\n".join([header, *_unmarked_rate_rows(
+        np.random.default_rng(100 + s), 0, 25000)]) + "\n")["virtual"] for s in range(10))
+    assert flagged == 0
 
 
 def test_stream_times_follow_the_cell_definition():

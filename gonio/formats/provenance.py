@@ -128,8 +128,8 @@ def file_provenance(path) -> dict:
     """:func:`provenance` of one file's metadata, made virtual also where its measured values
     carry the virtual bench's watermark (:func:`gonio.formats.watermark.detect`: readings or
     a stream whose ``#`` lines or Parquet metadata were deleted or edited, rows deleted or
-    reordered, the file renamed or re-saved by a spreadsheet; read lazily, up to its first
-    cells);
+    reordered, the file renamed or re-saved by a spreadsheet; read row by row, block by
+    block, up to its first 400 000 rows);
     ``evidence`` then names ``watermark`` and ``watermark`` holds the test (cells, matching,
     p_value). The watermark is read only where the metadata do not already say virtual.
 

@@ -250,7 +250,7 @@ def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None 
 
 #: readings SHA-256 → whether the readings are the virtual bench's, per blob folder: a stored
 #: file never changes under its SHA-256, so its answer is read once (its metadata header, and
-#: its values' watermark read lazily up to its first 20 000 cells: a file's size costs nothing)
+#: its values' watermark read block by block up to its first 400 000 rows)
 _VIRTUAL_READINGS: dict[tuple[str, str], bool] = {}
 
 
@@ -259,7 +259,7 @@ def virtual_readings(store, readings_sha256: str | None) -> bool:
     metadata (:func:`gonio.formats.provenance.provenance`: ``# bench:``, ``# seed:``,
     ``# generator: gonio``) or the watermark in their values
     (:func:`gonio.formats.provenance.file_provenance`: read line by line, or a Parquet
-    stream batch by batch, up to its first cells), as the lists mark each calibration; read
+    stream batch by batch, up to its first 400 000 rows), as the lists mark each calibration; read
     once per stored file and kept (the answer of a content-addressed file cannot change). A
     file that is missing or unreadable is not marked (and not kept: its calibration's own
     page says why)."""
