@@ -68,3 +68,31 @@ def test_import_refuses_a_contradicting_laboratory_file(spec, protocol, seed, tm
     # command line's certificate and its finding name (not the readings' serial)
     with sqlite3.connect(data / "records.sqlite3") as db:
         assert [r[0] for r in db.execute("select serial from instruments")] == [LAB_SERIAL]
+
+
+def test_readings_without_a_serial_are_recorded_under_the_laboratory_files(
+        tmp_path, monkeypatch, capsys, shared_simulation):
+    """Readings that state no serial, calibrated with a laboratory file that does: no
+    contradiction, and the certificate names the laboratory file's serial; the records
+    register the instrument under it too, not as "(unknown serial)"."""
+    spec, protocol, seed = RUNS[0]
+    monkeypatch.chdir(tmp_path)
+    sim, data = tmp_path / "sim", tmp_path / "data"
+    simulated(shared_simulation, spec, protocol, seed, sim)
+    readings = sim / "readings.csv"
+    text = readings.read_text(encoding="utf-8")
+    assert "# serial:" in text
+    readings.write_text("".join(ln for ln in text.splitlines(keepends=True)
+                                if not ln.startswith("# serial:")), encoding="utf-8")
+    lab = lab_file(tmp_path)
+    lab.write_text(re.sub(r"(?ms)^\[\[standards\]\]\n.*?\n\n", "", lab.read_text("utf-8")),
+                   encoding="utf-8")
+    proto = ["--protocol", PINS / protocol]
+    run_in_process(capsys, "calibrate", readings, "--spec", spec, *proto, "--lab", lab,
+                   "--out", tmp_path / "out")
+    assert LAB_SERIAL in (tmp_path / "out" / "certificate.html").read_text(encoding="utf-8")
+    run_in_process(capsys, "db", "init", "--data", data)
+    run_in_process(capsys, "db", "import", "--data", data, "--readings", readings, *proto,
+                   "--lab", lab, tmp_path / "out")
+    with sqlite3.connect(data / "records.sqlite3") as db:
+        assert [r[0] for r in db.execute("select serial from instruments")] == [LAB_SERIAL]

@@ -275,7 +275,7 @@ def check_readings_unrecorded(args) -> None:
     try:
         with store.session() as s:
             try:
-                services.check_readings_unused(s, sha)
+                services.check_readings_unused(s, sha, path=args.readings)
             except GonioError as exc:
                 raise GonioError(exc.message, file=args.readings, key=exc.key) from None
     finally:

@@ -519,10 +519,14 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
                  "rows": {k: len(v) for k, v in rows.items() if v}, "files": len(names)}
         if replace:
             event["replaced"] = summary(store)["rows"]
+            kept = _counters_kept(store, rows)
+            if kept:
+                event["counters_kept"] = kept
         _check_space(store, zf, names, path)
         for sha_file in sorted(names):
             _put_blob(store.blob_root, sha_file, zf, path)
     _fill_stated(store, rows)
+    _fill_content(store, rows)
     who = actor.username if actor is not None else "(command line)"
     _restored_records_verify(store, rows, path, dict(event), who)
     if not replace:
@@ -601,6 +605,42 @@ def _fill_stated(store, rows: dict) -> None:
 
     sha = {c.get("id"): c.get("results_sha256") for c in rows["calibrations"]}
     fill_stated(store.blob_root, rows["result_items"], lambda r: sha.get(r.get("calibration_id")))
+
+
+def _counters_kept(store, rows: dict) -> dict:
+    """A restore over live records never sets a year's certificate counter back: where the
+    live counter is ahead of the archive's (certificates numbered after the backup was made),
+    the restored counter keeps the live one, so that no number issued before is given again
+    to another certificate (the numbers in between stay unused: the certificates they name
+    are not in the archive). Changes ``rows`` in place; returns ``{year: {"archive": n,
+    "kept": m}}`` for the audit event."""
+    from gonio.records.models import CertificateCounter
+
+    with store.session() as s:
+        live = dict(s.execute(select(CertificateCounter.year, CertificateCounter.last)).all())
+    archive = {r["year"]: r for r in rows["certificate_counters"]}
+    kept = {}
+    for year, last in sorted(live.items()):
+        row = archive.get(year)
+        if row is None:
+            rows["certificate_counters"].append({"year": year, "last": last})
+            kept[str(year)] = {"archive": 0, "kept": last}
+        elif (row.get("last") or 0) < last:
+            kept[str(year)] = {"archive": row.get("last") or 0, "kept": last}
+            row["last"] = last
+    return kept
+
+
+def _fill_content(store, rows: dict) -> None:
+    """The readings' content digests as the restored files give them, never as the archive
+    states them (an archive's digest could hide readings calibrated twice): every
+    calibration's readings file digested (:func:`gonio.records.blobs.readings_content`)."""
+    from gonio.records.blobs import readings_content
+
+    stored = {b.get("sha256") for b in rows["blobs"]}
+    shas = sorted({c.get("readings_sha256") for c in rows["calibrations"]} & stored)
+    rows["readings_contents"] = [{"sha256": sha, "content_sha256": d} for sha in shas
+                                 if (d := readings_content(store.blob_root, sha)) is not None]
 
 
 def check_summary(rows: dict) -> dict:
@@ -943,6 +983,7 @@ def consistency_problems(store) -> list[str]:
     approver created the calibration it first certifies (ISO/IEC 17025 7.8.1.1: refused on
     every path, so such a row was written around the records)."""
     from gonio.records.models import Calibration, Certificate, CertificateCounter
+    from gonio.records.services import NUMBER_PREFIX
 
     out = []
     with store.session() as s:
@@ -955,7 +996,7 @@ def consistency_problems(store) -> list[str]:
         numbers = list(s.scalars(select(Certificate.number))) + [
             n for n in s.scalars(select(Calibration.pending_number)) if n]
         for number in sorted(numbers):
-            m = re.fullmatch(r"[A-Z]+-(\d{4})-(\d+)", number)
+            m = re.fullmatch(rf"{re.escape(NUMBER_PREFIX)}-(\d{{4}})-(\d+)", number)
             if m and int(m.group(2)) > last.get(int(m.group(1)), 0):
                 out.append(f"certificate {number}: beyond the {m.group(1)} counter "
                            f"({last.get(int(m.group(1)), 0)}): the next approval would "

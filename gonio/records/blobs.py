@@ -120,3 +120,17 @@ def verify(root: str | os.PathLike, sha256: str) -> bool:
     except GonioError:
         return False
     return True
+
+
+def readings_content(root: str | os.PathLike, sha256: str) -> str | None:
+    """The content digest (:func:`gonio.formats.content.content_sha256`) of the stored file
+    ``sha256``; None where the file is not in the store or holds no readable table."""
+    from gonio.formats.content import content_sha256
+
+    src = blob_path(root, sha256)
+    if not src.is_file():
+        return None
+    try:
+        return content_sha256(src)
+    except (OSError, ValueError):
+        return None

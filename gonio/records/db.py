@@ -231,4 +231,5 @@ def open_store(database: str | None = None, data: str | os.PathLike | None = Non
                 raise GonioError(problem, key="--database") from None
             raise
     return Store(url=url, engine=engine,
-                 sessions=sessionmaker(engine, expire_on_commit=False), data=folder)
+                 sessions=sessionmaker(engine, expire_on_commit=False,
+                                      info={"blob_root": folder / "blobs"}), data=folder)

@@ -305,7 +305,7 @@ def lab_environment(details: dict) -> dict:
 
 
 def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | None,
-                    res_path: Path, option_paths=()) -> dict:
+                    res_path: Path, option_paths=(), meta: dict | None = None) -> dict:
     """The readings ``rd`` (and the files they name as part of their data, and those an
     option gave, ``option_paths``: ``--thermal FILE``, ``--tilt FILE``) against the
     laboratory file ``lab`` and the registered instrument's ``record`` as ``gonio calibrate``
@@ -315,8 +315,9 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
     without this laboratory file, or before the instrument's record said otherwise, states
     none: calibrate it again). Returns the identity the certificate states where the
     laboratory file proceeds past a contradiction of the readings' serial, model or
-    manufacturer: ``{metadata key: the laboratory file's value}`` (:func:`lab_identity`), else
-    {}."""
+    manufacturer, and where the readings' metadata ``meta`` state none of them (a serial the
+    readings do not give is the laboratory file's, as the certificate states it):
+    ``{metadata key: the laboratory file's value}`` (:func:`lab_identity`), else {}."""
     from gonio.pipeline.dispatch import load_lab_file, named_files
     from gonio.pipeline.identity import MISMATCH_CODE, check_identity
     from gonio.specs import get
@@ -335,7 +336,9 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
         raise GonioError(f"{missing[0].split(';')[0]}: results.json does not state this "
                          "contradiction (computed without this laboratory file or record); "
                          "calibrate the readings again with it", file=res_path, key="identity")
-    return lab_identity(details, {str(f.subject) for f in found})
+    silent = {what for what, key in LAB_IDENTITY.items()
+              if not str((meta or {}).get(key) or "").strip()}
+    return lab_identity(details, {str(f.subject) for f in found} | silent)
 
 
 #: The contradicted identity fields (a finding's subject) whose laboratory file value the
@@ -345,7 +348,8 @@ LAB_IDENTITY = {"serial": "serial", "model": "model", "manufacturer": "manufactu
 
 def lab_identity(details: dict | None, contradicted: set[str]) -> dict:
     """The laboratory file's ``[instrument]`` values of the ``contradicted`` identity fields
-    (:data:`LAB_IDENTITY`), as the readings' metadata keys: the instrument the records
+    (:data:`LAB_IDENTITY`; those the readings leave blank too), as the readings' metadata
+    keys: the instrument the records
     register the calibration under, so that the issued certificate names what the command
     line's certificate and its finding ("the certificate's identity and conditions are the
     laboratory file's") name.
@@ -756,14 +760,14 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         inst = registered_instrument(s, meta)
         record = {"gyro_type": inst.gyro_type} if inst is not None and inst.gyro_type else None
         try:                       # one measurement, one calibration: before the work
-            services.check_readings_unused(s, str(source.get("sha256", "")))
+            services.check_readings_unused(s, str(source.get("sha256", "")), path=rd)
         except GonioError as exc:
             raise GonioError(exc.message, file=rd, key=exc.key) from None
     from gonio.pipeline.dispatch import INSTRUMENT_FILE_OPTIONS
     given = [p for option, _, p in option_inputs(get(key), check_manifest(folder), res_path, rd,
                                                  option_files)
              if option in INSTRUMENT_FILE_OPTIONS]   # checked like the files the readings name
-    meta = {**meta, **_check_identity(rd, lab, key, results, record, res_path, given)}
+    meta = {**meta, **_check_identity(rd, lab, key, results, record, res_path, given, meta)}
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
     psha = None
@@ -845,7 +849,7 @@ def _record_import(store, folder, again, actor, meta, key, customer, day, rd, rs
         s.flush()
         services.use_standards(s, cal, lab_standard_ids(s, lab_stds, day, lab))
         try:                       # one measurement, one calibration: else nothing committed
-            services.check_readings_unused(s, rsha, other_than=cal.id)
+            services.check_readings_unused(s, rsha, other_than=cal.id, path=rd)
         except GonioError as exc:
             raise GonioError(exc.message, file=rd, key=exc.key) from None
         services.audit(s, actor, "import", "calibration", cal.id, None,

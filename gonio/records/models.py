@@ -14,7 +14,9 @@ triggers (the migrations create them, for SQLite and PostgreSQL alike):
 * ``table_calibrations``  a registered table calibration is never changed or removed
                     (migration 0009): a correction is a new registration;
 * ``table_calibration_withdrawals``  a table calibration's withdrawal (migration 0010):
-                    no UPDATE, no DELETE.
+                    no UPDATE, no DELETE;
+* ``readings_contents``  a stored readings file's content digest (migration 0014): no
+                    UPDATE, no DELETE.
 
 Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
 ``date`` values, calendar dates of the laboratory in its time zone (the setting
@@ -219,6 +221,15 @@ class Blob(Base):
     sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
     size: Mapped[int] = mapped_column(BigInteger)
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class ReadingsContent(Base):
+    """A stored readings file's content digest (:func:`gonio.formats.content.content_sha256`:
+    its data apart from how they are written), kept when first computed; insert-only, as the
+    file's own record (migration 0014). A file with no row: not yet digested, or no table."""
+    __tablename__ = "readings_contents"
+    sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"), primary_key=True)
+    content_sha256: Mapped[str] = mapped_column(String(64), index=True)
 
 
 class Customer(Base):

@@ -43,7 +43,8 @@ from gonio.records import blobs
 from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
-                                  Instrument, ResultItem, Setting, Standard, TableCalibration,
+                                  Instrument, ReadingsContent, ResultItem, Setting, Standard,
+                                  TableCalibration,
                                   TableCalibrationWithdrawal, User, is_past_due,
                                   laboratory_zone, records_today, utcnow)
 from gonio.records.results import NOT_STATED, result_rows
@@ -890,26 +891,85 @@ FAILED_HINT = (" (it failed and can be run again; void it if it will not be, and
                "are free)")
 
 
-def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None) -> list[dict]:
+def _writes(s: Session) -> bool:
+    """Whether ``s`` is a writing session (:meth:`gonio.records.db.Store.writing`)."""
+    try:
+        return bool(s.get_bind().get_execution_options().get("gonio_write"))
+    except Exception:                       # noqa: BLE001 - an unbound session: no
+        return False
+
+
+def readings_content_of(s: Session, sha256: str, path=None) -> str | None:
+    """The content digest of the stored file ``sha256`` (table ``readings_contents``,
+    :func:`gonio.records.blobs.readings_content`), computed from the store's file where none
+    is kept yet (the session's ``info["blob_root"]``, set by
+    :func:`gonio.records.db.open_store`) and kept where ``s`` writes and the file is stored;
+    None: no such file, no table in it, or no store known. ``path``: the file itself, where
+    it is not stored yet."""
+    row = s.get(ReadingsContent, sha256)
+    if row is not None:
+        return row.content_sha256
+    root = s.info.get("blob_root")
+    if path is not None and Path(path).is_file():
+        from gonio.formats.content import content_sha256
+        try:
+            digest = content_sha256(path)
+        except (OSError, ValueError):
+            digest = None
+    else:
+        digest = None if root is None else blobs.readings_content(root, sha256)
+    if digest is not None and _writes(s) and s.get(Blob, sha256) is not None:
+        s.add(ReadingsContent(sha256=sha256, content_sha256=digest))
+    return digest
+
+
+def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
+                     path=None) -> list[dict]:
     """The calibrations that stand (any state but rejected or void) whose readings are the
-    file ``sha256``, less ``other_than``: ``[{"id", "serial", "performed_on", "status"}]``,
-    oldest first."""
-    q = (select(Calibration.id, Instrument.serial, Calibration.performed_on, Calibration.status)
-         .join(Instrument, Calibration.instrument_id == Instrument.id)
-         .where(Calibration.readings_sha256 == sha256, Calibration.status.not_in(CLOSED)))
-    if other_than is not None:
-        q = q.where(Calibration.id != other_than)
-    return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]}
-            for r in s.execute(q.order_by(Calibration.id)).all()]
+    file ``sha256`` or hold its data written otherwise (the same content digest,
+    :func:`readings_content_of`: a newline, line ends, metadata lines, the order of rows or
+    columns, a number's spelling), less ``other_than``: ``[{"id", "serial",
+    "performed_on", "status", "same": "file" | "content"}]``, oldest first. ``path``: the
+    readings file itself, where it is not in the store yet."""
+    def standing(q):
+        q = (q.join(Instrument, Calibration.instrument_id == Instrument.id)
+             .where(Calibration.status.not_in(CLOSED)))
+        return q if other_than is None else q.where(Calibration.id != other_than)
+
+    cols = (Calibration.id, Instrument.serial, Calibration.performed_on, Calibration.status,
+            Calibration.readings_sha256)
+    found = {r[0]: r for r in s.execute(standing(select(*cols)).where(
+        Calibration.readings_sha256 == sha256)).all()}
+    content = readings_content_of(s, sha256, path)
+    if content is not None:
+        # a standing calibration's readings not yet digested (an older store, a restore)
+        fresh = {other for (other,) in s.execute(
+            standing(select(Calibration.readings_sha256))
+            .outerjoin(ReadingsContent, Calibration.readings_sha256 == ReadingsContent.sha256)
+            .where(ReadingsContent.sha256.is_(None)).distinct()).all()
+            if other != sha256 and readings_content_of(s, other) == content}
+        if _writes(s):
+            s.flush()
+        for r in s.execute(standing(select(*cols))
+                           .outerjoin(ReadingsContent,
+                                      Calibration.readings_sha256 == ReadingsContent.sha256)
+                           .where((ReadingsContent.content_sha256 == content)
+                                  | Calibration.readings_sha256.in_(fresh))).all():
+            found.setdefault(r[0], r)
+    return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3],
+             "same": "file" if r[4] == sha256 else "content"}
+            for _, r in sorted(found.items())]
 
 
 def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = None,
-                          reason: str = "") -> list[dict]:
+                          reason: str = "", path=None) -> list[dict]:
     """The one check, on every path that records readings for a calibration (the web form
     and :func:`create_calibration`, ``gonio db import`` and ``gonio calibrate --record``,
     a bench's acquired readings), that one measurement is not certified as several: readings
-    whose SHA-256 are already those of another calibration that stands
-    (:func:`readings_used_by`) are refused, a one-line GonioError (key :data:`REUSE_KEY`)
+    whose SHA-256 are already those of another calibration that stands, or whose data are
+    (the same content digest: the same readings with a newline added, other line ends or
+    metadata lines, rows or columns in another order; :func:`readings_used_by`, ``path``
+    the file where it is not stored yet) are refused, a one-line GonioError (key :data:`REUSE_KEY`)
     naming that calibration (id, instrument serial, date, state) — unless ``reason`` says
     why they are used again (the web form asks it; the caller audits it). The lineage of one
     calibration is one row: a review, a re-computation, a redraft or an amendment of it
@@ -918,10 +978,12 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
     run again), the refusal says to void it first. ``other_than``: the calibration the
     readings are being recorded for. Call it inside the writing session that records them, so nothing
     is recorded when it refuses. Returns the other calibrations (empty when none)."""
-    before = readings_used_by(s, sha256, other_than=other_than)
+    before = readings_used_by(s, sha256, other_than=other_than, path=path)
     if before and not reason:
         first = before[0]
-        raise GonioError(f"these readings (SHA-256 {sha256[:12]}…) are already those of "
+        how = ("are already those of" if first["same"] == "file" else
+               "hold the same data, written otherwise, as the readings of")
+        raise GonioError(f"these readings (SHA-256 {sha256[:12]}…) {how} "
                          f"calibration {first['id']} ({first['serial']}, "
                          f"{first['performed_on']}, {first['status']})"
                          + (f" and {len(before) - 1} more" if len(before) > 1 else "")
@@ -2143,7 +2205,9 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     one changes, another approves), whatever ``min_people``; with ``min_people`` 2 that
     person may be the calibration's creator (the two-person laboratory: the reviewer asks
     and changes, the creator approves), with 3 never. The same for a first issue: who
-    reviewed it and last changed its details (:func:`last_changer`) does not approve it."""
+    reviewed it and last changed its details (:func:`last_changer`) does not approve it.
+    The person the readings name as their operator (:func:`readings_operator`, matched by
+    full name or user name, case and spacing folded) counts as the creator."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
@@ -2159,6 +2223,13 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     if cal.created_by_id == actor.id and not (amending and min_people(s) == 2):
         raise GonioError(f"the person who created a calibration may not {action} it "
                          "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
+    operator = readings_operator(s, cal)
+    if operator and not (amending and min_people(s) == 2) \
+            and _printed_name(operator) in {_printed_name(_name(actor)),
+                                            _printed_name(actor.username)}:
+        raise GonioError(f"the readings name {actor.username!r} ({operator!r}) as their "
+                         f"operator: the person who measured may not {action} the "
+                         "calibration (ISO/IEC 17025 7.8.1.1: a second person)", key="role")
     if action == "approve" and not amending and min_people(s) >= 3 \
             and cal.reviewed_by_id == actor.id:
         raise GonioError("the person who reviewed the calibration may not approve it (the "
@@ -2169,6 +2240,29 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
                          "environment, what its certificate states) and reviewed it may not "
                          "approve it too (one changes, another checks): another person "
                          "reviews or approves", key="role")
+
+
+def readings_operator(s: Session, cal: Calibration) -> str:
+    """Who measured a calibration's readings, as their ``# operator:`` line (or a stream's
+    metadata) names them; "" where they name nobody or the file cannot be read (no store
+    known: the session's ``info["blob_root"]``). :func:`check_duties` treats that person as
+    the calibration's creator: they neither review nor approve it."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.compute import readings_file
+
+    root = s.info.get("blob_root")
+    if root is None or not cal.readings_sha256:
+        return ""
+    src = blobs.blob_path(root, cal.readings_sha256)
+    if not src.is_file():
+        return ""
+    try:
+        with readings_file(src) as path:
+            md = readings_metadata(path)
+    except (GonioError, OSError, ValueError):
+        return ""
+    md = {str(k).strip().casefold(): v for k, v in md.items()}
+    return " ".join(str(md.get("operator") or "").split())
 
 
 def last_changer(s: Session, cal_id: int) -> int | None:

@@ -152,3 +152,37 @@ def test_a_failure_part_way_leaves_the_live_records(nightly, people, tmp_path, m
                 restore(store, archive, replace=True, actor=people["admin"])
         assert snapshot(store) == before
         assert not list(store.data.glob(".records.sqlite3.restoring-*"))
+
+
+def test_a_replace_never_sets_the_certificate_counter_back(nightly, people, monkeypatch,
+                                                           computed_folder, bench_readings):
+    """Last night's archive numbered one certificate; the live records issued a second
+    since. Restored over them, the counter keeps the live one: the next certificate is the
+    third, never a second GC-YYYY-0002 naming another calibration."""
+    from .test_records_sealed import issue
+
+    store, archive = nightly
+    with store.session() as s:
+        second = s.scalar(select(services.Calibration).order_by(services.Calibration.id.desc())
+                          .limit(1))
+    issue(store, people, second, monkeypatch, computed_folder)
+    with store.session() as s:
+        numbers = sorted(s.scalars(select(Certificate.number)))
+    assert [n[-4:] for n in numbers] == ["0001", "0002"]
+    restore(store, archive, replace=True, actor=people["admin"])
+    with store.session() as s:
+        assert [c.number for c in s.scalars(select(Certificate))] == numbers[:1]
+        event = s.scalar(select(AuditEvent).order_by(AuditEvent.id.desc()).limit(1))
+    year = numbers[0].split("-")[1]
+    assert json.loads(event.after_json)["counters_kept"] == {year: {"archive": 1, "kept": 2}}
+    assert backup_mod.verify(store)[1] == []
+    inst_id = second.instrument_id
+    with store.session() as s:
+        std = s.scalar(select(services.Standard).limit(1))
+        inst = s.get(services.Instrument, inst_id)
+    third = new_calibration(store, people, inst, std, bench_readings[1])
+    run_worker(store, monkeypatch, computed_folder)
+    issue(store, people, third, monkeypatch, computed_folder)
+    with store.session() as s:
+        got = sorted(s.scalars(select(Certificate.number)))
+    assert got == [numbers[0], f"{numbers[0][:-4]}0003"]

@@ -220,3 +220,26 @@ def test_a_serial_in_another_case_is_the_registered_instrument(store, people):
             assert registered_instrument(s, meta).id == inst.id, meta
         assert registered_instrument(s, {"serial": "RLG-0002", "manufacturer":
                                          "Example Gyro Works", "model": "RLG-GM-1"}) is None
+
+
+def test_the_readings_operator_neither_reviews_nor_approves(store, people, computed_folder,
+                                                            bench_readings, monkeypatch):
+    """The person the readings name as their operator (``# operator: virtual bench``)
+    counts as the calibration's creator, matched by full name (case and spacing folded):
+    they neither review it nor approve its first issue; two others do."""
+    from .conftest import PASSWORD
+
+    measured = services.create_user(store, None, "vb", PASSWORD, "reviewer",
+                                    full_name="Virtual  BENCH")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    with store.session() as s:
+        assert services.readings_operator(s, services.calibration(store, cal.id)) == \
+            "virtual bench"
+    with pytest.raises(GonioError, match=r"as their operator: the person who measured "
+                                         r"may not review") as got:
+        services.review(store, measured, cal.id, accept=True)
+    assert got.value.key == "role"
+    services.review(store, people["rev"], cal.id, accept=True)
+    with pytest.raises(GonioError, match="may not approve"):
+        services.approve(store, measured, cal.id)
+    assert services.approve(store, people["rev2"], cal.id).status == "issuing"
