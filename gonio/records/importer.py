@@ -336,8 +336,13 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
         raise GonioError(f"{missing[0].split(';')[0]}: results.json does not state this "
                          "contradiction (computed without this laboratory file or record); "
                          "calibrate the readings again with it", file=res_path, key="identity")
-    silent = {what for what, key in LAB_IDENTITY.items()
-              if not str((meta or {}).get(key) or "").strip()}
+    def says(*keys):
+        return any(str((meta or {}).get(k) or "").strip() for k in keys)
+    # the fields the records name the instrument by (:func:`_identity`: the model, else the
+    # instrument's description) that the readings leave blank
+    silent = {what for what, keys in (("serial", ("serial",)),
+                                      ("model", ("model", "instrument")),
+                                      ("manufacturer", ("manufacturer",))) if not says(*keys)}
     return lab_identity(details, {str(f.subject) for f in found} | silent)
 
 
