@@ -47,6 +47,18 @@ class GonioError(ValueError):
         return text if len(text) <= 600 else text[:600] + f"… ({len(text)} characters)"
 
 
+def first_of(problems: list) -> str:
+    """The first of several problems, and how many more there are, for a one-line error.
+
+    >>> first_of(["a missing", "b late", "c void"])
+    'a missing (and 2 more)'
+    >>> first_of(["a missing"])
+    'a missing'
+    """
+    more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+    return f"{problems[0]}{more}"
+
+
 class NotFoundError(GonioError):
     """A named input (a protocol, a bench, a file) does not exist: callers that try several
     places catch this one and let every other error through."""

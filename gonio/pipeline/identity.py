@@ -25,7 +25,7 @@ import math
 import re
 from pathlib import Path
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, first_of
 from gonio.formats.metadata import parse_number
 from gonio.formats.provenance import readings_metadata
 from gonio.report.header import condition_text
@@ -277,10 +277,10 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
         return []
     if (((lab or {}).get("identity") or {}).get("on_mismatch") or "refuse") != "proceed":
         c = found[0]
-        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+        first = first_of([_message(c), *found[1:]])
         where = f" ({lab_file})" if lab_file else ""
         if c.get("message", "").startswith(UNSTATED):
-            raise GonioError(f"{_message(c)}{more}: nothing ties the file to the instrument "
+            raise GonioError(f"{first}: nothing ties the file to the instrument "
                              f"the laboratory file{where} or the readings name; state its serial "
                              "(# serial:), or set [identity] on_mismatch = \"proceed\" to state "
                              "it on the certificate", file=Path(readings).name)
@@ -291,7 +291,7 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
                 "instrument among the files the readings name)"
         else:
             named = f"the laboratory file{where} names"
-        raise GonioError(f"{_message(c)}{more}: the readings are not of the instrument or "
+        raise GonioError(f"{first}: the readings are not of the instrument or "
                          f"conditions {named}; correct one of them, "
                          "or set [identity] on_mismatch = \"proceed\" to state it on the "
                          "certificate", file=Path(readings).name)

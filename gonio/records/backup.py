@@ -28,7 +28,7 @@ from pathlib import Path
 from sqlalchemy import Date, DateTime, Integer, func, select, text
 
 from gonio import limits
-from gonio.errors import GonioError
+from gonio.errors import GonioError, first_of
 from gonio.records import blobs
 from gonio.records.models import Base, Blob, User
 
@@ -74,8 +74,7 @@ def backup(store, path: str | os.PathLike) -> dict:
                          "nothing written (gonio db verify lists them)", file=path)
     _, problems = verify(store, files=False)
     if problems:      # an archive of them would be refused by restore: said now, not then
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise GonioError(f"the records do not verify: {problems[0]}{more}; nothing written "
+        raise GonioError(f"the records do not verify: {first_of(problems)}; nothing written "
                          "(gonio db verify lists them)", file=path)
     fd, tmp = tempfile.mkstemp(prefix=".backup-", suffix=".zip", dir=path.parent or ".")
     os.close(fd)
@@ -575,8 +574,7 @@ def _restored_records_verify(store, rows: dict, path: Path, event: dict, who: st
             raise GonioError(f"the restored records could not be written ({msg}): the live "
                              "records are unchanged; nothing restored", file=path) from None
     if problems:
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise GonioError(f"the archive's records do not verify: {problems[0]}{more}; nothing "
+        raise GonioError(f"the archive's records do not verify: {first_of(problems)}; nothing "
                          "restored", file=path)
 
 

@@ -39,7 +39,7 @@ from typing import Iterable
 
 from sqlalchemy import select
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, first_of
 from gonio.records import services
 from gonio.records.models import Calibration, Instrument, User
 
@@ -139,9 +139,9 @@ def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=N
         where = ("the instrument's record" if c["lab_key"].startswith("instrument")
                  else "what was entered")
         tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
-        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
-        raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
-                         f"{where} {c['lab']}{tol}{more}: these readings are not of this "
+        said = (f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
+                f"{where} {c['lab']}{tol}")
+        raise GonioError(f"{first_of([said, *found[1:]])}: these readings are not of this "
                          "instrument or these conditions", key="readings")
 
 
