@@ -3,11 +3,12 @@
 Two files hold the same measurement when their data are the same, whatever their bytes:
 a trailing newline added, CRLF line ends, a byte-order mark, ``#`` metadata lines edited or
 deleted, blank lines, spaces around cells, numbers re-spelt by a spreadsheet (``60.0`` →
-``60``), columns or rows put in another order. :func:`content_sha256` is a digest of the data
-alone: the header's column names (stripped, case-folded) and the multiset of data rows, each
-cell in the watermark's canonical form (:func:`gonio.formats.watermark.canonical`: a number
-as ``'%.15g'`` of its value). The records compare it, beside the file's SHA-256, where they
-refuse the same measurement calibrated twice.
+``60``), columns or rows put in another order, a column with no value in any row added or
+deleted. :func:`content_sha256` is a digest of the data alone: the names of the columns that
+hold a value (stripped, case-folded) and the multiset of data rows, each row the set of its
+non-empty cells tagged with their column's name, each cell in the form :func:`cell_text`
+gives. The records compare it, beside the file's SHA-256, where they refuse the same
+measurement calibrated twice.
 
 It is not a seal: a changed value, a row added or deleted gives another digest, as it gives
 another measurement; and the row multiset is summed (128-bit keyed row digests added
@@ -19,33 +20,77 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
+import re
 from pathlib import Path
+
+import numpy as np
 
 from gonio.formats.watermark import canonical
 
 #: The first bytes of a Parquet file.
 PARQUET_MAGIC = b"PAR1"
-#: The digest's version (part of what is hashed: a changed canonical form changes every digest).
-VERSION = b"gonio readings content v1"
+#: The digest's version (part of what is hashed: a changed cell form changes every digest;
+#: the records' migration 0015 digests the stored files again under a new one).
+VERSION = b"gonio readings content v2"
 _MOD = 1 << 128
+#: An integer written with more digits than a double holds exactly is kept whole.
+_INTEGER = re.compile(r"^[+-]?\d+$")
+#: A decimal number as a readings cell writes it (the watermark's pattern).
+_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 
 
-def _row_sum(rows, order: list[int]) -> tuple[int, int]:
-    """(count, Σ row digest mod 2¹²⁸) of the rows, each row's cells in ``order``."""
+def cell_text(cell) -> str:
+    """A cell as the digest keys it. A number: ``'%.15g'`` of its value (a spreadsheet's
+    15-digit re-save keys alike: ``60.0``, ``60``, ``6E1``), except an integral value, which
+    is written whole — exactly where the cell is an integer (a 64-bit counter's
+    ``18446744073709550709`` is not ``1.84467440737096e+19``), else where a double holds it
+    exactly (below 2⁵³: ``1e15`` is ``1000000000000000``); −0 as 0. Other text stripped.
+
+    >>> cell_text("60.0"), cell_text(" 6E1"), cell_text("-0"), cell_text("2.50"), cell_text("x ")
+    ('60', '60', '0', '2.5', 'x')
+    >>> cell_text("18446744073709550709"), cell_text(18446744073709550615), cell_text("1e15")
+    ('18446744073709550709', '18446744073709550615', '1000000000000000')
+    """
+    if isinstance(cell, str):
+        c = cell.strip()
+        if _INTEGER.match(c):
+            return str(int(c))
+        if not _NUMBER.match(c):
+            return c
+        value = float(c) + 0.0
+    elif isinstance(cell, (int, np.integer)) and not isinstance(cell, bool):
+        return str(int(cell))
+    elif isinstance(cell, (float, np.floating)):
+        value = float(cell) + 0.0
+    else:
+        return canonical(cell)
+    if value.is_integer() and abs(value) < 2.0 ** 53:
+        return str(int(value))
+    return "%.15g" % value
+
+
+def _row_sum(rows, names: list[str], filled: set[int]) -> tuple[int, int]:
+    """(count, Σ row digest mod 2¹²⁸) of the rows, each row its non-empty cells tagged with
+    their column's name in ``names`` (sorted by name: the columns' order does not count; an
+    empty cell is no part of its row); ``filled`` gathers the columns that hold a value."""
     total = count = 0
+    order = sorted(range(len(names)), key=lambda i: names[i])
     for row in rows:
-        cells = [canonical(row[i]) if i < len(row) else "" for i in order]
-        if not any(cells):
+        cells = [(i, cell_text(row[i])) for i in order if i < len(row)]
+        cells = [(i, c) for i, c in cells if c]
+        if not cells:
             continue
-        h = hashlib.blake2b("\x1f".join(cells).encode(), digest_size=16, key=VERSION)
+        filled.update(i for i, _ in cells)
+        text = "\x1f".join(f"{names[i]}\x1d{c}" for i, c in cells)
+        h = hashlib.blake2b(text.encode(), digest_size=16, key=VERSION)
         total = (total + int.from_bytes(h.digest(), "big")) % _MOD
         count += 1
     return count, total
 
 
-def _finish(header: list[str], count: int, total: int) -> str:
+def _finish(names: list[str], filled: set[int], count: int, total: int) -> str:
     h = hashlib.sha256(VERSION)
-    h.update("\x1f".join(header).encode())
+    h.update("\x1f".join(sorted(names[i] for i in filled)).encode())
     h.update(f"\x1e{count}\x1e{total:032x}".encode())
     return h.hexdigest()
 
@@ -55,18 +100,22 @@ def _csv(data: bytes) -> str | None:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
         return None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    # lines end at "\n" only, as the readers split them (str.splitlines also splits at a
+    # form feed or U+2028 inside a cell, which the readers strip as space)
+    lines = [ln.rstrip("\r") for ln in text.split("\n")]
+    lines = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         return None
-    reader = csv.reader(io.StringIO("\n".join(lines)))
-    names = [c.strip().casefold() for c in next(reader)]
-    while names and names[-1] == "":
-        names.pop()
-    if not names:
+    try:
+        reader = csv.reader(io.StringIO("\n".join(lines)))
+        names = [c.strip().casefold() for c in next(reader)]
+        if not any(names):
+            return None
+        filled: set[int] = set()
+        count, total = _row_sum(reader, names, filled)
+    except csv.Error:                   # a cell past csv's field limit, a NUL: no table
         return None
-    order = sorted(range(len(names)), key=lambda i: names[i])
-    count, total = _row_sum(reader, order)
-    return _finish([names[i] for i in order], count, total)
+    return _finish(names, filled, count, total)
 
 
 def _parquet(path: Path) -> str | None:
@@ -77,14 +126,14 @@ def _parquet(path: Path) -> str | None:
     except Exception:                       # noqa: BLE001 - not a readable Parquet file
         return None
     names = [str(n).strip().casefold() for n in pf.schema_arrow.names]
-    order = sorted(range(len(names)), key=lambda i: names[i])
     count = total = 0
+    filled: set[int] = set()
     for batch in pf.iter_batches(batch_size=65536):
         cols = [batch.column(i).to_pylist() for i in range(batch.num_columns)]
         rows = zip(*[["" if v is None else v for v in c] for c in cols])
-        n, t = _row_sum(rows, order)
+        n, t = _row_sum(rows, names, filled)
         count, total = count + n, (total + t) % _MOD
-    return _finish([names[i] for i in order], count, total)
+    return _finish(names, filled, count, total)
 
 
 def content_sha256(path: str | Path) -> str | None:

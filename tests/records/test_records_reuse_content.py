@@ -57,6 +57,12 @@ def rewritten(src: Path, how: str) -> bytes:
         return "\n".join(meta + header + [r.replace(",60.0,", ",60,")
                                           .replace(",120.0,", ",1.2E2,") for r in rows]
                          + [""]).encode()
+    if how == "empty_column":       # a column with no value in any row, added
+        return "\n".join(meta + [header[0] + ",operator_note"] + [r + "," for r in rows]
+                         + [""]).encode()
+    if how == "form_feed":          # a stray form feed after a cell, stripped as space
+        return "\n".join(meta + header + [rows[0].replace(",", "\x0c,", 1)] + rows[1:]
+                         + [""]).encode()
     if how == "value":
         cells = rows[0].split(",")
         col = header[0].split(",").index("gyro_counts")
@@ -65,7 +71,8 @@ def rewritten(src: Path, how: str) -> bytes:
     raise ValueError(how)
 
 
-WRITTEN_OTHERWISE = ("newline", "crlf", "bom", "metadata", "reversed", "columns", "respelt")
+WRITTEN_OTHERWISE = ("newline", "crlf", "bom", "metadata", "reversed", "columns", "respelt",
+                     "empty_column", "form_feed")
 
 
 @pytest.mark.parametrize("how", WRITTEN_OTHERWISE)
@@ -86,6 +93,47 @@ def test_one_value_or_one_row_is_another_measurement(tmp_path, bench_readings):
     fewer.write_text("\n".join(meta + header + rows[:-1] + [""]), encoding="utf-8")
     digests = {content_sha256(p) for p in (src, changed, fewer, bench_readings[1])}
     assert len(digests) == 4
+
+
+def test_a_64_bit_counters_counts_are_kept_whole(tmp_path):
+    """Counts of an unsigned 64-bit counter that counts down from zero differ in their low
+    digits only: two such streams drifting at different rates are two measurements (a
+    15-digit cell form made them one), while an integral value spelt as a decimal is the
+    integer (``1e15``, ``60.0``)."""
+    start = 2 ** 64 - 1000
+    a, b, c, d = (tmp_path / f"{n}.csv" for n in "abcd")
+    a.write_text("time_s,gyro_counts\n0.000,%d\n0.001,%d\n" % (start, start - 1))
+    b.write_text("time_s,gyro_counts\n0.000,%d\n0.001,%d\n" % (start, start - 2))
+    c.write_text("time_s,gyro_counts\n0,1000000000000000\n1.0,60\n")
+    d.write_text("time_s,gyro_counts\n0.0,1e15\n1,60.0\n")
+    assert content_sha256(a) != content_sha256(b)
+    assert content_sha256(c) == content_sha256(d)
+
+
+def test_a_column_with_a_value_is_part_of_the_data(tmp_path):
+    a, b, c = (tmp_path / f"{n}.csv" for n in "abc")
+    a.write_text("time_s,gyro_counts\n0,1\n1,2\n")
+    b.write_text("time_s,gyro_counts,temperature_c\n0,1,\n1,2,\n")
+    c.write_text("time_s,gyro_counts,temperature_c\n0,1,\n1,2,20.1\n")
+    assert content_sha256(a) == content_sha256(b) != content_sha256(c)
+
+
+def test_a_file_csv_cannot_read_has_no_digest_and_is_refused_by_the_reader(tmp_path,
+                                                                         bench_readings,
+                                                                         capsys):
+    """A cell past csv's field limit: no content digest (only the SHA-256 identifies the
+    file), and the calibration stops at the reader's one-line refusal, not a traceback."""
+    big = tmp_path / "big.csv"
+    meta, header, rows = _split(bench_readings[1].read_text(encoding="utf-8"))
+    cells = rows[0].split(",")
+    cells[-1] = "x" * 200_000
+    big.write_text("\n".join(meta + header + [",".join(cells)] + rows[1:] + [""]),
+                   encoding="utf-8")
+    assert content_sha256(big) is None
+    argv = ["calibrate", str(big), "--protocol", str(SMALL_PROTOCOL), "--record",
+            "--data", str(tmp_path / "data"), "--out", str(tmp_path / "o")]
+    err = _refused(argv, capsys)
+    assert "characters, over the limit" in err and "Traceback" not in err
 
 
 def test_a_parquet_stream_and_its_rows_reordered_digest_alike(tmp_path):
@@ -191,6 +239,36 @@ def test_a_restore_digests_the_files_never_the_archives_digest(tmp_path, bench_r
         (got,) = db.execute("select content_sha256 from readings_contents where sha256 = ?",
                             (cal.readings_sha256,)).fetchone()
     assert got == content_sha256(bench_readings[0])     # the file's own digest
+
+
+def test_the_migration_digests_again_what_the_first_form_kept(store, bench_readings):
+    """A store at 0014 keeps digests of the digest's first form, which no new file's digest
+    matches: at the head they are the stored files' digests of the current form (SQLite and
+    PostgreSQL)."""
+    from sqlalchemy import text
+
+    from .test_result_statement import _downgrade
+
+    people = make_people(store)
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    _downgrade(store.engine, "0014")
+    with store.engine.begin() as c:         # as the first form kept it
+        c.execute(text("INSERT INTO readings_contents (sha256, content_sha256) "
+                       "VALUES (:s, :d)"), {"s": cal.readings_sha256, "d": "1" * 64})
+    url, data = store.url, store.data
+    store.close()
+    again = open_store(None if url.startswith("sqlite") else url, data)
+    try:
+        with again.engine.connect() as c:
+            got = c.execute(text("SELECT sha256, content_sha256 FROM readings_contents")).all()
+        assert [tuple(r) for r in got] == [(cal.readings_sha256,
+                                            content_sha256(bench_readings[0]))]
+        with pytest.raises(Exception, match="never changed"):
+            with again.engine.begin() as c:
+                c.execute(text("DELETE FROM readings_contents"))
+    finally:
+        again.close()
 
 
 def test_the_migration_digests_an_older_stores_readings(store, bench_readings):
