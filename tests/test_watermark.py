@@ -160,12 +160,12 @@ def test_false_positive_rate_on_real_looking_readings():
         trials += 1
         # each test (the times; the outputs' mark of gonio 230195c0 and earlier) by scipy,
         # the file's p the smallest × the number of tests (Bonferroni)
-        refs = [binomtest(t["matching"], t["cells"], 0.5, alternative="greater").pvalue
+        refs = [binomtest(t["matching"], t["cells"], 0.5, alternative="two-sided").pvalue
                 for t in got["tests"] if t["cells"] >= MIN_CELLS]
         for t in got["tests"]:
             if t["cells"] >= MIN_CELLS:
                 assert t["p_value"] == pytest.approx(binomtest(
-                    t["matching"], t["cells"], 0.5, alternative="greater").pvalue, rel=1e-9)
+                    t["matching"], t["cells"], 0.5, alternative="two-sided").pvalue, rel=1e-9)
         assert got["p_value"] == pytest.approx(min(1.0, len(got["tests"]) * min(refs)),
                                                rel=1e-9)
         small += got["p_value"] <= 0.05
@@ -198,10 +198,12 @@ def test_perturbed_bench_readings_are_not_flagged(simulated):
 
 
 def test_level_and_smallest_file():
-    """The level is the binomial test's: 20 matching cells of 20 reach it, 19 do not."""
-    assert binomtest(20, 20, 0.5, alternative="greater").pvalue <= ALPHA
-    assert binomtest(19, 19, 0.5, alternative="greater").pvalue > ALPHA
-    assert MIN_CELLS == 20
+    """The level is the two-sided binomial test's: 21 matching cells of 21 reach it (and 0
+    of 21), 20 of 20 do not."""
+    assert binomtest(21, 21, 0.5, alternative="two-sided").pvalue <= ALPHA
+    assert binomtest(0, 21, 0.5, alternative="two-sided").pvalue <= ALPHA
+    assert binomtest(20, 20, 0.5, alternative="two-sided").pvalue > ALPHA
+    assert MIN_CELLS == 21
 
 
 @pytest.mark.parametrize("spec", [r[0] for r in RUNS])
@@ -265,7 +267,7 @@ def test_optical_real_looking_readings_are_not_flagged():
         got = detect_text("test,series,round,rate_dps,orientation,time_s,table_deg,"
                           "gyro_counts,gyro_deg\n" + body)
         assert not got["virtual"] and got["cells"] == n, got
-        ref = binomtest(got["matching"], got["cells"], 0.5, alternative="greater").pvalue
+        ref = binomtest(got["matching"], got["cells"], 0.5, alternative="two-sided").pvalue
         assert got["p_value"] == pytest.approx(ref, rel=1e-9)
         small += got["p_value"] <= 0.05
     ci = binomtest(small, 400, 0.05).proportion_ci(0.999)

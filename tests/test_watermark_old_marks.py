@@ -31,16 +31,17 @@ def _split(text: str):
     return head, data[0], data[1:]
 
 
-def _shifted(text: str, rows: int | None = None) -> str:
+def _shifted(text: str, rows: int | None = None, every: int = 1) -> str:
     """The file with every measured value (the old mark's columns) moved by one unit of its
-    last written decimal: each old mark's parity flipped; ``rows``: only the first rows."""
+    last written decimal: each old mark's parity flipped; ``rows``: only the first rows;
+    ``every``: only every ``every``-th row's values (the others as written)."""
     head, header, data = _split(text)
     names = [c.strip() for c in header.split(",")]
     cols = [j for j, n in enumerate(names) if n in COLUMNS]
     out = []
-    for line in data[:rows]:
+    for i, line in enumerate(data[:rows]):
         cells = line.rstrip("\n").split(",")
-        for j in (j for j in cols if cells[j].strip()):
+        for j in (j for j in cols if cells[j].strip() and i % every == 0):
             v = Decimal(cells[j])
             cells[j] = str(v + Decimal(1).scaleb(v.as_tuple().exponent))
         out.append(",".join(cells) + "\n")
@@ -58,22 +59,27 @@ def test_old_mark_recognised_without_metadata(name):
     got = detect_text(text)
     n = got["cells"]                       # every distinct measured cell matches its bit
     assert got["virtual"] and got["matching"] == n >= len(data), got
-    # the reported tail: both tests' level shared (Bonferroni), scipy's binomial tail × 2
-    assert got["p_value"] == pytest.approx(min(1.0, 2 * binom.sf(n - 1, n, 0.5)), rel=1e-9)
+    # the reported p: the tests' level shared (Bonferroni), scipy's two-sided p × the tests
+    m = len(got["tests"])
+    assert got["p_value"] == pytest.approx(min(1.0, m * 2 * binom.sf(n - 1, n, 0.5)), rel=1e-9)
     assert file_provenance(OLD / name)["evidence"] == ["watermark"]
-    # the same values one unit off in their last digit carry no mark: not the bench's
-    assert not detect_text(_shifted(text))["virtual"]
+    # every value one unit off in its last digit turns every parity over: the bench's
+    # values, offset (the two-sided test); every other value off carries no mark
+    assert detect_text(_shifted(text))["virtual"]
+    assert not detect_text(_shifted(text, every=2))["virtual"]
 
 
 def test_two_marks_share_the_level():
-    """20 matching cells of the old mark alone (2⁻²⁰ ≈ 9.5·10⁻⁷ ≤ ALPHA) do not decide a
-    file that is tested in two places (the level halved); 21 (2⁻²¹ ≤ ALPHA/2) do."""
+    """21 matching cells of the old mark alone (two-sided 2·2⁻²¹ ≈ 9.5·10⁻⁷ ≤ ALPHA) do
+    not decide a file that is tested in two places (the level halved); 22 (2·2⁻²² ≤
+    ALPHA/2) do."""
     text = (OLD / "jjf-230195c0.csv").read_text(encoding="utf-8")
     head, header, data = _split(text)
-    assert 0.5 ** 20 <= ALPHA < 2 * 0.5 ** 20 and 0.5 ** 21 <= ALPHA / 2
+    assert 2 * 0.5 ** 21 <= ALPHA < 4 * 0.5 ** 21 and 2 * 0.5 ** 22 <= ALPHA / 2
     cut = lambda k: "".join(head) + header + "".join(data[:k])    # noqa: E731
-    assert not detect_text(cut(20))["virtual"]
-    assert detect_text(cut(21))["virtual"]
+    assert len(detect_text(cut(21))["tests"]) == 2
+    assert not detect_text(cut(21))["virtual"]
+    assert detect_text(cut(22))["virtual"]
 
 
 def test_calibrate_marks_an_old_marked_file_virtual(tmp_path, capsys):

@@ -41,24 +41,31 @@ Which cells
     metadata are deleted.
 How it is detected
     :func:`detect` reads a CSV file line by line, or a Parquet stream batch by batch, up to
-    :data:`MAX_ROWS` rows. The ``#`` lines and Parquet metadata are not used. It takes each
-    marked cell once per distinct row context and, block by block of :data:`MAX_CELLS`
-    consecutive cells, counts the cells whose ``q`` has the parity of their bit (``k`` of
-    ``n``) and computes the one-sided binomial tail ``P(K ≥ k)`` for
-    ``K ~ Binomial(n, 1/2)``. The readings are the virtual bench's when a block of ``n ≥``
-    :data:`MIN_CELLS` cells has a tail at most its level (:func:`block_level`: the first
+    :data:`MAX_ROWS` rows. The metadata lines (as the readers take them: ``#`` after
+    blanks, or quoted as one cell) and Parquet metadata are not used. It takes each marked
+    cell once per distinct row context and, block by block of :data:`MAX_CELLS` consecutive
+    cells, counts the cells whose ``q`` has the parity of their bit (``k`` of ``n``) and
+    computes the two-sided binomial p-value for ``K ~ Binomial(n, 1/2)``
+    (:func:`two_sided_p`: times shifted by an odd number of nanoseconds turn every parity
+    over, ``k = 0``). The readings are the virtual bench's when a block of ``n ≥``
+    :data:`MIN_CELLS` cells has a p-value at most its level (:func:`block_level`: the first
     block at nearly :data:`ALPHA`, the later ones sharing a thousandth of it), so simulated
-    rows appended to (or put among) real ones are found wherever a block is mostly theirs. A rate or triad file with
-    times is tested twice, in ``time_s`` and in the measured columns the bench marked until
-    2026-12-02, each at :data:`ALPHA`/2 (Bonferroni: the file's level stays :data:`ALPHA`).
+    rows appended to (or put among) real ones are found wherever a block is mostly theirs.
+    Each test is made with the row's other cells in the file's column order; a file whose
+    columns are a bench header's (:data:`BENCH_HEADERS`) in another order, or with columns
+    more (a spreadsheet's rearrangement, a note column), is tested in the bench's order as
+    well (:func:`bench_order`). A rate or triad file with times is tested in ``time_s`` and
+    in the measured columns the bench marked until 2026-12-02. The tests of one file share
+    :data:`ALPHA` (Bonferroni: each at :data:`ALPHA` divided by their number, so the file's
+    level stays :data:`ALPHA`).
 False positives
     On readings not written by the bench, the bit of each distinct row context is a keyed
     pseudo-random function of cells the marked value is not part of, so each cell matches
     with probability 1/2 independently of what the values are (constant, even only,
     quantised, times on a millisecond grid): a file is flagged with probability at most
-    :data:`ALPHA` = 10⁻⁶ (the binomial test's own level; exactly ``2⁻ⁿ`` at ``k = n``),
+    :data:`ALPHA` = 10⁻⁶ (the binomial test's own level; exactly ``2·2⁻ⁿ`` at ``k = n``),
     whatever its size. A marked file of ``n`` cells has ``k = n``: 27 cells (the smallest
-    built-in protocol) give ``2⁻²⁷ ≈ 7.5·10⁻⁹``.
+    built-in protocol) give ``2·2⁻²⁷ ≈ 1.5·10⁻⁸``.
 What it does not do
     It is not a security seal: the key is in this module, so anyone who means to can strip
     it. Readings perturbed in their marked digit (re-rounded, noise added, times re-written
@@ -80,6 +87,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gonio.formats.metadata import is_comment
+
 #: The key (a constant of gonio: the watermark marks provenance, it does not seal it).
 KEY = b"gonio virtual bench readings watermark v2"
 #: The measured columns the watermark is written into and read from in a rate or triad file
@@ -94,8 +103,8 @@ TIME_DECIMALS = 9
 #: The level of the detection's binomial test: a file not written by the bench is flagged
 #: with probability at most this.
 ALPHA = 1e-6
-#: The fewest cells the detection decides on (2⁻²⁰ ≈ 9.5·10⁻⁷ ≤ ALPHA at k = n).
-MIN_CELLS = 20
+#: The fewest cells the detection decides on (two-sided, 2·2⁻²¹ ≈ 9.5·10⁻⁷ ≤ ALPHA at k = n).
+MIN_CELLS = 21
 #: The distinct cells of one block of the detection: a file is tested block by block, each
 #: block of this many consecutive cells on its own (:func:`block_level`), so that marked rows
 #: after unmarked ones (or among them) are not diluted by the whole file.
@@ -108,6 +117,45 @@ LATER_BLOCKS_SHARE = 1e-3
 SIGNIFICANT = 15
 
 _NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+
+_STREAM = ("time_s", "gyro_counts")
+#: The column orders the virtual bench writes (the optical readings, streams and static
+#: records, the rate readings, the triad's readings and thermal readings): a row's bits are
+#: keyed on its other cells in the order they were written, so a file whose columns were
+#: put in another order, or given a column more, is read in its bench order as well
+#: (:func:`bench_order`; tests/test_watermark.py checks every simulated file's header is
+#: one of these).
+BENCH_HEADERS: tuple[tuple[str, ...], ...] = (
+    ("test", "series", "round", "rate_dps", "orientation", "time_s", "table_deg",
+     "gyro_counts", "gyro_deg"),
+    _STREAM, _STREAM + ("table_deg",), _STREAM + ("temperature_c",),
+    _STREAM + ("table_deg", "temperature_c"),
+    ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz", "temperature_c",
+     "supply_v", "up_axis", "north_axis", "reference_dps", "output", "stand_deg",
+     "stand_axis", "supply_set_v"),
+    ("test", "step", "phase", "up", "north0", "table_deg", "rate_dps", "time_s",
+     "duration_s", "n_samples", "chamber_c", "sensor_c", "supply_v", "out_x", "out_y",
+     "out_z", "sd_x", "sd_y", "sd_z"),
+)
+
+
+def bench_order(header) -> tuple[str, ...] | None:
+    """The bench's order (:data:`BENCH_HEADERS`) a header's columns were written in, where
+    the header is not that order itself: the longest bench header all of whose columns the
+    header has, with a marked column among them; None where the header is a bench header as
+    it stands, or holds none.
+
+    >>> bench_order(["time_s", "gyro_counts", "table_deg"]) is None
+    True
+    >>> bench_order(["table_deg", "note", "time_s", "gyro_counts"])
+    ('time_s', 'gyro_counts', 'table_deg')
+    """
+    names = tuple(str(h).strip().lstrip("\ufeff") for h in header)
+    if names in BENCH_HEADERS:
+        return None
+    have = set(names)
+    fits = [h for h in BENCH_HEADERS if have.issuperset(h) and TIME_COLUMN in h]
+    return max(fits, key=len) if fits else None
 
 
 def cell_bit(column: str, context: str) -> tuple[int, int]:
@@ -201,11 +249,13 @@ def column_decimals(name: str, values) -> int:
 
 
 def _iter_rows(lines):
-    """(line index, cells) of a CSV text's lines, the header first: '#' lines and blank
-    lines skipped. ``lines`` may be any iterable (a file read lazily)."""
+    """(line index, cells) of a CSV text's lines, the header first: metadata lines (as the
+    readers take them, :func:`gonio.formats.metadata.is_comment`: ``#`` after blanks, or
+    quoted as one cell) and blank lines skipped. ``lines`` may be any iterable (a file read
+    lazily)."""
     for i, line in enumerate(lines):
         s = line.rstrip("\r\n")
-        if not s.strip() or s.lstrip("\ufeff").startswith("#"):
+        if not s.strip() or is_comment(s):
             continue
         yield i, (next(csv.reader([s])) if '"' in s else s.split(","))
 
@@ -325,7 +375,7 @@ def _data_columns(lines: list[str], start: int, width: int) -> tuple[list[int], 
     after row in one list (cell ``j`` of row ``r`` at ``r·width + j``)."""
     idx = [i for i in range(start + 1, len(lines))
            if (s := lines[i].rstrip("\r\n")).count(",") == width - 1 and '"' not in s
-           and s.strip() and not s.lstrip("\ufeff").startswith("#")]
+           and s.strip() and not is_comment(s)]
     return idx, ",".join([lines[i].rstrip("\r\n") for i in idx]).split(",")
 
 
@@ -477,7 +527,7 @@ def block_level(j: int, alpha: float = ALPHA) -> float:
     :data:`LATER_BLOCKS_SHARE`), so that the levels of all blocks sum to at most ``alpha``
     (a union bound, as Bonferroni: a file not written by the bench is flagged with
     probability at most ``alpha`` however long it is), and a file of one block is decided
-    almost as before (its 20 cells at k = n, 2⁻²⁰, still flagged at :data:`ALPHA`).
+    almost as before (its 21 cells at k = n, two-sided 2⁻²⁰, still flagged at :data:`ALPHA`).
 
     >>> block_level(1) > 2.0 ** -20, sum(block_level(j) for j in range(1, 60)) <= ALPHA
     (True, True)
@@ -489,10 +539,13 @@ def block_level(j: int, alpha: float = ALPHA) -> float:
 
 class _Tally:
     """The detection's count over distinct (column, context) cells, block by block of
-    :data:`MAX_CELLS` cells, up to :data:`MAX_ROWS` rows."""
+    :data:`MAX_CELLS` cells, up to :data:`MAX_ROWS` rows. ``order``: the indices of the
+    cells a row's context is made of, in their order (None: every cell but the marked ones,
+    in the file's order)."""
 
-    def __init__(self, cols: dict[int, str]):
+    def __init__(self, cols: dict[int, str], order: list[int] | None = None):
         self.cols = cols
+        self.order = order
         self.seen: set[int] = set()       # hash((column, context)) of every cell taken
         self.cells: list[tuple[str, str, Decimal]] = []
         self.blocks: list[tuple[int, int]] = []     # (n, k) of each block closed
@@ -502,7 +555,10 @@ class _Tally:
     def add(self, cells) -> bool:
         """Take one row's cells; False once enough are read."""
         self.rows += 1
-        ctx = _context(cells, self.cols, self.memo)
+        if self.order is None:
+            ctx = _context(cells, self.cols, self.memo)
+        else:
+            ctx = _context([cells[j] for j in self.order], (), self.memo)
         for j, name in self.cols.items():
             v = _value(cells[j])
             key = hash((name, ctx))
@@ -540,7 +596,7 @@ class _Tally:
         for j, (n, k) in enumerate(self.blocks, start=1):
             if n < MIN_CELLS and best is not None:
                 continue
-            p = tail_probability(k, n) if n >= MIN_CELLS else None
+            p = two_sided_p(k, n) if n >= MIN_CELLS else None
             level = block_level(j, alpha)
             score = math.inf if p is None else p / level
             if best is None or score < best[0]:
@@ -551,10 +607,18 @@ class _Tally:
 
 def _tallies(header) -> list[_Tally]:
     """The tests of a file with this header: its marked columns (:func:`marked_columns`)
-    and, for a rate or triad file with times, the columns the bench marked before
+    with each row's other cells in the file's order and, where its columns are a bench
+    header's in another order or with more (:func:`bench_order`), in that bench order; for
+    a rate or triad file with times, the columns the bench marked before
     (:func:`legacy_columns`)."""
-    return [t for t in (_Tally(marked_columns(header)), _Tally(legacy_columns(header)))
-            if t.cols]
+    out = [t for t in (_Tally(marked_columns(header)), _Tally(legacy_columns(header)))
+           if t.cols]
+    order = bench_order(header)
+    if order is not None:
+        names = [str(h).strip().lstrip("\ufeff") for h in header]
+        cols = {names.index(TIME_COLUMN): TIME_COLUMN}
+        out.append(_Tally(cols, [names.index(n) for n in order if n != TIME_COLUMN]))
+    return out
 
 
 def _combined(tallies: list[_Tally]) -> dict:
@@ -571,7 +635,8 @@ def _combined(tallies: list[_Tally]) -> dict:
     p = best["p_value"]
     return {**best, "virtual": any(r["virtual"] for r in res),
             "p_value": None if p is None else min(1.0, m * p),
-            "tests": [{**r, "columns": sorted(set(t.cols.values()))}
+            "tests": [{**r, "columns": sorted(set(t.cols.values())),
+                       "order": "file" if t.order is None else "bench"}
                       for t, r in zip(tallies, res)]}
 
 
@@ -599,6 +664,20 @@ def tail_probability(k: int, n: int) -> float:
     match the watermark in ``k`` or more of ``n`` cells."""
     from scipy.stats import binom
     return float(binom.sf(k - 1, n, 0.5))
+
+
+def two_sided_p(k: int, n: int) -> float:
+    """The two-sided binomial p-value of ``k`` matching cells of ``n``:
+    ``min(1, 2·min(P(K ≥ k), P(K ≤ k)))``, K ~ Binomial(n, 1/2) (scipy's ``binomtest``
+    two-sided, for p = 1/2). Two-sided because every time shifted by an odd number of
+    nanoseconds (times re-zeroed at a marked reading) turns each parity over: ``k = 0`` is
+    as far from chance as ``k = n``.
+
+    >>> two_sided_p(21, 21) == two_sided_p(0, 21) == 2.0 ** -20
+    True
+    """
+    from scipy.stats import binom
+    return float(min(1.0, 2.0 * min(binom.sf(k - 1, n, 0.5), binom.cdf(k, n, 0.5))))
 
 
 _NONE = {"virtual": False, "cells": 0, "matching": 0, "p_value": None}
