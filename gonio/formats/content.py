@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gonio.formats.metadata import is_comment
 from gonio.formats.watermark import canonical
 
 #: The first bytes of a Parquet file.
@@ -95,25 +96,27 @@ def _finish(names: list[str], filled: set[int], count: int, total: int) -> str:
     return h.hexdigest()
 
 
-def _csv(data: bytes) -> str | None:
+def _csv(path: Path) -> str | None:
+    """The digest of a CSV file, read line by line (memory bounded by the longest line)."""
+    def data_lines(fh):
+        # lines end at "\n" only, as the readers split them (str.splitlines also splits at
+        # a form feed or U+2028 inside a cell, which the readers strip as space); metadata
+        # lines as the readers take them (indented, or quoted by a spreadsheet)
+        for line in fh:
+            line = line.rstrip("\n").rstrip("\r")
+            if line.strip() and not is_comment(line):
+                yield line
+
     try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        return None
-    # lines end at "\n" only, as the readers split them (str.splitlines also splits at a
-    # form feed or U+2028 inside a cell, which the readers strip as space)
-    lines = [ln.rstrip("\r") for ln in text.split("\n")]
-    lines = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        return None
-    try:
-        reader = csv.reader(io.StringIO("\n".join(lines)))
-        names = [c.strip().casefold() for c in next(reader)]
-        if not any(names):
-            return None
-        filled: set[int] = set()
-        count, total = _row_sum(reader, names, filled)
-    except csv.Error:                   # a cell past csv's field limit, a NUL: no table
+        with open(path, encoding="utf-8-sig", newline="\n") as fh:
+            reader = csv.reader(data_lines(fh))
+            header = next(reader, None)
+            names = [c.strip().casefold() for c in header or []]
+            if not any(names):
+                return None
+            filled: set[int] = set()
+            count, total = _row_sum(reader, names, filled)
+    except (UnicodeDecodeError, csv.Error):   # not text; a cell past csv's field limit
         return None
     return _finish(names, filled, count, total)
 
@@ -153,8 +156,6 @@ def content_sha256(path: str | Path) -> str | None:
     """
     path = Path(path)
     with open(path, "rb") as fh:
-        head = fh.read(4)
-        if head == PARQUET_MAGIC:
+        if fh.read(4) == PARQUET_MAGIC:
             return _parquet(path)
-        data = head + fh.read()
-    return _csv(data)
+    return _csv(path)

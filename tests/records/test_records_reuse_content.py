@@ -60,6 +60,8 @@ def rewritten(src: Path, how: str) -> bytes:
     if how == "empty_column":       # a column with no value in any row, added
         return "\n".join(meta + [header[0] + ",operator_note"] + [r + "," for r in rows]
                          + [""]).encode()
+    if how == "quoted_metadata":    # a spreadsheet's re-save: each # line one quoted cell
+        return "\n".join(['"' + m + '"' for m in meta] + header + rows + [""]).encode()
     if how == "form_feed":          # a stray form feed after a cell, stripped as space
         return "\n".join(meta + header + [rows[0].replace(",", "\x0c,", 1)] + rows[1:]
                          + [""]).encode()
@@ -72,7 +74,7 @@ def rewritten(src: Path, how: str) -> bytes:
 
 
 WRITTEN_OTHERWISE = ("newline", "crlf", "bom", "metadata", "reversed", "columns", "respelt",
-                     "empty_column", "form_feed")
+                     "empty_column", "form_feed", "quoted_metadata")
 
 
 @pytest.mark.parametrize("how", WRITTEN_OTHERWISE)
