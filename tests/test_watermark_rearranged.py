@@ -23,10 +23,7 @@ from scipy.stats import binomtest
 from gonio.cli import main
 from gonio.formats.watermark import BENCH_HEADERS, bench_order, detect, detect_text
 
-HERE = Path(__file__).resolve().parent
-PINS = HERE / "data" / "pins"
-RUNS = (("ogam-draft", "ogam-draft-small.toml"), ("jjf1535-2015", "jjf1535-2015-small.toml"),
-        ("iec62047-20", "iec62047-20-small.toml"), ("triad-alignment", None))
+from tests.test_watermark import PINS, RUNS
 
 
 @pytest.fixture(scope="module")

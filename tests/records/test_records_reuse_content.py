@@ -243,58 +243,51 @@ def test_a_restore_digests_the_files_never_the_archives_digest(tmp_path, bench_r
     assert got == content_sha256(bench_readings[0])     # the file's own digest
 
 
+def _migrated(store, bench_readings, revision: str, before=None, change: str = "") -> None:
+    """One calibration recorded, the schema taken down to ``revision`` (``before(engine,
+    calibration)`` then run on it), the store opened again at the head: its digests are the
+    stored file's of the current form, and ``change`` (SQL) is refused by the triggers."""
+    from sqlalchemy import text
+
+    from .test_result_statement import _downgrade
+
+    people = make_people(store)
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    _downgrade(store.engine, revision)
+    if before is not None:
+        before(store.engine, cal)
+    url, data = store.url, store.data
+    store.close()
+    again = open_store(None if url.startswith("sqlite") else url, data)
+    try:
+        with again.engine.connect() as c:
+            got = c.execute(text("SELECT sha256, content_sha256 FROM readings_contents")).all()
+        assert [tuple(r) for r in got] == [(cal.readings_sha256,
+                                            content_sha256(bench_readings[0]))]
+        with pytest.raises(Exception, match="never changed"):
+            with again.engine.begin() as c:
+                c.execute(text(change))
+    finally:
+        again.close()
+
+
 def test_the_migration_digests_again_what_the_first_form_kept(store, bench_readings):
     """A store at 0014 keeps digests of the digest's first form, which no new file's digest
     matches: at the head they are the stored files' digests of the current form (SQLite and
     PostgreSQL)."""
     from sqlalchemy import text
 
-    from .test_result_statement import _downgrade
-
-    people = make_people(store)
-    inst, std = setup_instrument(store, people)
-    cal = new_calibration(store, people, inst, std, bench_readings[0])
-    _downgrade(store.engine, "0014")
-    with store.engine.begin() as c:         # as the first form kept it
-        c.execute(text("INSERT INTO readings_contents (sha256, content_sha256) "
-                       "VALUES (:s, :d)"), {"s": cal.readings_sha256, "d": "1" * 64})
-    url, data = store.url, store.data
-    store.close()
-    again = open_store(None if url.startswith("sqlite") else url, data)
-    try:
-        with again.engine.connect() as c:
-            got = c.execute(text("SELECT sha256, content_sha256 FROM readings_contents")).all()
-        assert [tuple(r) for r in got] == [(cal.readings_sha256,
-                                            content_sha256(bench_readings[0]))]
-        with pytest.raises(Exception, match="never changed"):
-            with again.engine.begin() as c:
-                c.execute(text("DELETE FROM readings_contents"))
-    finally:
-        again.close()
+    def first_form(engine, cal):            # as the first form kept it
+        with engine.begin() as c:
+            c.execute(text("INSERT INTO readings_contents (sha256, content_sha256) "
+                           "VALUES (:s, :d)"), {"s": cal.readings_sha256, "d": "1" * 64})
+    _migrated(store, bench_readings, "0014", first_form, "DELETE FROM readings_contents")
 
 
 def test_the_migration_digests_an_older_stores_readings(store, bench_readings):
     """Records written before the digest (schema 0013) open at the head with every
     calibration's readings digested from the stored file (SQLite and PostgreSQL), and the
     digest cannot be changed in the database."""
-    from sqlalchemy import text
-
-    from .test_result_statement import _downgrade
-
-    people = make_people(store)
-    inst, std = setup_instrument(store, people)
-    cal = new_calibration(store, people, inst, std, bench_readings[0])
-    _downgrade(store.engine, "0013")
-    url, data = store.url, store.data
-    store.close()
-    again = open_store(None if url.startswith("sqlite") else url, data)
-    try:
-        with again.engine.connect() as c:
-            got = c.execute(text("SELECT sha256, content_sha256 FROM readings_contents")).all()
-        assert [tuple(r) for r in got] == [(cal.readings_sha256,
-                                            content_sha256(bench_readings[0]))]
-        with pytest.raises(Exception, match="never changed"):
-            with again.engine.begin() as c:
-                c.execute(text("UPDATE readings_contents SET content_sha256 = 'x'"))
-    finally:
-        again.close()
+    _migrated(store, bench_readings, "0013",
+              change="UPDATE readings_contents SET content_sha256 = 'x'")
