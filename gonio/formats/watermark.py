@@ -123,8 +123,8 @@ _STREAM = ("time_s", "gyro_counts")
 #: records, the rate readings, the triad's readings and thermal readings): a row's bits are
 #: keyed on its other cells in the order they were written, so a file whose columns were
 #: put in another order, or given a column more, is read in its bench order as well
-#: (:func:`bench_order`; tests/test_watermark.py checks every simulated file's header is
-#: one of these).
+#: (:func:`bench_order`; tests/test_watermark_rearranged.py checks that every simulated
+#: file's header is one of these).
 BENCH_HEADERS: tuple[tuple[str, ...], ...] = (
     ("test", "series", "round", "rate_dps", "orientation", "time_s", "table_deg",
      "gyro_counts", "gyro_deg"),
