@@ -34,8 +34,6 @@ PARQUET_MAGIC = b"PAR1"
 #: the records' migration 0015 digests the stored files again under a new one).
 VERSION = b"gonio readings content v2"
 _MOD = 1 << 128
-#: An integer written with more digits than a double holds exactly is kept whole.
-_INTEGER = re.compile(r"^[+-]?\d+$")
 #: A decimal number as a readings cell writes it (the watermark's pattern).
 _NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 
@@ -54,10 +52,11 @@ def cell_text(cell) -> str:
     """
     if isinstance(cell, str):
         c = cell.strip()
-        if _INTEGER.match(c):
-            return str(int(c))
-        if not _NUMBER.match(c):
+        m = _NUMBER.match(c)
+        if m is None:
             return c
+        if m.group(3) is None and "." not in c:          # an integer, kept whole
+            return str(int(c))
         value = float(c) + 0.0
     elif isinstance(cell, (int, np.integer)) and not isinstance(cell, bool):
         return str(int(cell))
@@ -76,13 +75,15 @@ def _row_sum(rows, names: list[str], filled: set[int]) -> tuple[int, int]:
     empty cell is no part of its row); ``filled`` gathers the columns that hold a value."""
     total = count = 0
     order = sorted(range(len(names)), key=lambda i: names[i])
+    tags = [names[i] + "\x1d" for i in range(len(names))]
+    width = len(names)
     for row in rows:
-        cells = [(i, cell_text(row[i])) for i in order if i < len(row)]
-        cells = [(i, c) for i, c in cells if c]
+        cells = [(i, c) for i in order if i < len(row) and (c := cell_text(row[i]))]
         if not cells:
             continue
-        filled.update(i for i, _ in cells)
-        text = "\x1f".join(f"{names[i]}\x1d{c}" for i, c in cells)
+        if len(filled) < width:
+            filled.update(i for i, _ in cells)
+        text = "\x1f".join([tags[i] + c for i, c in cells])
         h = hashlib.blake2b(text.encode(), digest_size=16, key=VERSION)
         total = (total + int.from_bytes(h.digest(), "big")) % _MOD
         count += 1
