@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.formats.metadata import is_comment
+from gonio.formats.metadata import header_lines, is_comment
 from gonio.formats.watermark import canonical
 
 #: The first bytes of a Parquet file.
@@ -160,3 +160,37 @@ def content_sha256(path: str | Path) -> str | None:
         if fh.read(4) == PARQUET_MAGIC:
             return _parquet(path)
     return _csv(path)
+
+
+#: The metadata key with which readings name the stream they were reduced from by its bytes.
+SOURCE_KEY = "source_stream_sha256"
+_SHA256 = re.compile(r"^[0-9a-f]{64}$")
+
+
+def source_sha256(path: str | Path) -> str | None:
+    """The SHA-256 of the stream a readings file was reduced from, as its leading metadata
+    name it (``# source_stream_sha256:``, written by ``gonio reduce``), lower-case; None where
+    they name none, or the file is a Parquet stream or no text. The same measurement as its
+    stream: the records refuse one where the other is a standing calibration's readings.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> a = d / "a.csv"; _ = a.write_text("# source_stream_sha256: " + "AB" * 32 + "\\nt,v\\n")
+    >>> b = d / "b.csv"; _ = b.write_text("# source_stream: s.csv\\nt,v\\n")
+    >>> source_sha256(a) == "ab" * 32, source_sha256(b) is None
+    (True, True)
+    """
+    from gonio.errors import GonioError
+
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(4) == PARQUET_MAGIC:
+                return None
+        for key, value in header_lines(path):
+            if key.strip().lower() == SOURCE_KEY:
+                v = value.strip().lower()
+                return v if _SHA256.match(v) else None
+    except (OSError, GonioError):
+        return None
+    return None

@@ -134,3 +134,13 @@ def readings_content(root: str | os.PathLike, sha256: str) -> str | None:
         return content_sha256(src)
     except (OSError, ValueError):
         return None
+
+
+def readings_source(root: str | os.PathLike, sha256: str) -> str | None:
+    """The SHA-256 of the stream the stored readings file ``sha256`` was reduced from
+    (:func:`gonio.formats.content.source_sha256`); None where it names none or is not
+    stored."""
+    from gonio.formats.content import source_sha256
+
+    src = blob_path(root, sha256)
+    return source_sha256(src) if src.is_file() else None

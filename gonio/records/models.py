@@ -15,8 +15,8 @@ triggers (the migrations create them, for SQLite and PostgreSQL alike):
                     (migration 0009): a correction is a new registration;
 * ``table_calibration_withdrawals``  a table calibration's withdrawal (migration 0010):
                     no UPDATE, no DELETE;
-* ``readings_contents``  a stored readings file's content digest (migration 0014): no
-                    UPDATE, no DELETE.
+* ``readings_contents``  a stored readings file's content digest (migration 0014) and the
+                    stream it was reduced from (0015): no UPDATE, no DELETE.
 
 Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
 ``date`` values, calendar dates of the laboratory in its time zone (the setting
@@ -226,10 +226,13 @@ class Blob(Base):
 class ReadingsContent(Base):
     """A stored readings file's content digest (:func:`gonio.formats.content.content_sha256`:
     its data apart from how they are written), kept when first computed; insert-only, as the
-    file's own record (migration 0014). A file with no row: not yet digested, or no table."""
+    file's own record (migration 0014). A file with no row: not yet digested, or no table.
+    ``source_sha256``: the SHA-256 of the stream the readings were reduced from, where they
+    name it (``# source_stream_sha256``; migration 0015), else NULL."""
     __tablename__ = "readings_contents"
     sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"), primary_key=True)
     content_sha256: Mapped[str] = mapped_column(String(64), index=True)
+    source_sha256: Mapped[str | None] = mapped_column(String(64), index=True, nullable=True)
 
 
 class Customer(Base):

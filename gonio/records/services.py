@@ -906,31 +906,51 @@ def readings_content_of(s: Session, sha256: str, path=None) -> str | None:
     :func:`gonio.records.db.open_store`) and kept where ``s`` writes and the file is stored;
     None: no such file, no table in it, or no store known. ``path``: the file itself, where
     it is not stored yet."""
+    return _content_row(s, sha256, path)[0]
+
+
+def readings_source_of(s: Session, sha256: str, path=None) -> str | None:
+    """The SHA-256 of the stream the readings file ``sha256`` was reduced from, as the file
+    names it (``# source_stream_sha256``, :func:`gonio.formats.content.source_sha256`): kept
+    beside its content digest (:func:`readings_content_of`); None where it names none."""
+    return _content_row(s, sha256, path)[1]
+
+
+def _content_row(s: Session, sha256: str, path=None) -> tuple[str | None, str | None]:
+    """(content digest, source stream's SHA-256) of the file ``sha256``: its row of
+    ``readings_contents``, else computed from ``path`` or the store's file and kept where
+    ``s`` writes and the file is stored (:func:`readings_content_of`)."""
     row = s.get(ReadingsContent, sha256)
     if row is not None:
-        return row.content_sha256
+        return row.content_sha256, row.source_sha256
     root = s.info.get("blob_root")
     if path is not None and Path(path).is_file():
-        from gonio.formats.content import content_sha256
+        from gonio.formats.content import content_sha256, source_sha256
         try:
             digest = content_sha256(path)
         except (OSError, ValueError):
             digest = None
+        source = source_sha256(path)
+    elif root is None:
+        digest = source = None
     else:
-        digest = None if root is None else blobs.readings_content(root, sha256)
+        digest = blobs.readings_content(root, sha256)
+        source = blobs.readings_source(root, sha256)
     if digest is not None and _writes(s) and s.get(Blob, sha256) is not None:
-        s.add(ReadingsContent(sha256=sha256, content_sha256=digest))
-    return digest
+        s.add(ReadingsContent(sha256=sha256, content_sha256=digest, source_sha256=source))
+    return digest, source
 
 
 def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
                      path=None) -> list[dict]:
     """The calibrations that stand (any state but rejected or void) whose readings are the
-    file ``sha256`` or hold its data written otherwise (the same content digest,
+    file ``sha256``, hold its data written otherwise (the same content digest,
     :func:`readings_content_of`: a newline, line ends, metadata lines, the order of rows or
-    columns, a number's spelling), less ``other_than``: ``[{"id", "serial",
-    "performed_on", "status", "same": "file" | "content"}]``, oldest first. ``path``: the
-    readings file itself, where it is not in the store yet."""
+    columns, a number's spelling), are the stream it was reduced from (``"stream"``: the
+    file names that stream's SHA-256, :func:`readings_source_of`) or were reduced from it
+    (``"reduced"``: the file is their stream), less ``other_than``: ``[{"id", "serial",
+    "performed_on", "status", "same": "file" | "content" | "stream" | "reduced"}]``, oldest
+    first. ``path``: the readings file itself, where it is not in the store yet."""
     def standing(q):
         q = (q.join(Instrument, Calibration.instrument_id == Instrument.id)
              .where(Calibration.status.not_in(CLOSED)))
@@ -940,24 +960,45 @@ def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
             Calibration.readings_sha256)
     found = {r[0]: r for r in s.execute(standing(select(*cols)).where(
         Calibration.readings_sha256 == sha256)).all()}
-    content = readings_content_of(s, sha256, path)
-    if content is not None:
-        # a standing calibration's readings not yet digested (an older store, a restore)
-        fresh = {other for (other,) in s.execute(
+    content, source = _content_row(s, sha256, path)
+    how = {}
+    if source is not None:          # readings reduced from a stream a calibration used
+        for r in s.execute(standing(select(*cols)).where(
+                Calibration.readings_sha256 == source)).all():
+            found.setdefault(r[0], r)
+            how.setdefault(r[0], "stream")
+    # a standing calibration's readings not yet digested (an older store, a restore):
+    # digested now (and kept where ``s`` writes), compared by digest and by source
+    fresh, reduced = set(), set()
+    for (other,) in s.execute(
             standing(select(Calibration.readings_sha256))
             .outerjoin(ReadingsContent, Calibration.readings_sha256 == ReadingsContent.sha256)
-            .where(ReadingsContent.sha256.is_(None)).distinct()).all()
-            if other != sha256 and readings_content_of(s, other) == content}
-        if _writes(s):
-            s.flush()
+            .where(ReadingsContent.sha256.is_(None)).distinct()).all():
+        if other != sha256:
+            digest, came_from = _content_row(s, other)
+            if content is not None and digest == content:
+                fresh.add(other)
+            if came_from == sha256:
+                reduced.add(other)
+    if _writes(s):
+        s.flush()
+    if content is not None:
         for r in s.execute(standing(select(*cols))
                            .outerjoin(ReadingsContent,
                                       Calibration.readings_sha256 == ReadingsContent.sha256)
                            .where((ReadingsContent.content_sha256 == content)
                                   | Calibration.readings_sha256.in_(fresh))).all():
             found.setdefault(r[0], r)
+    # a stream whose reduced readings a calibration used
+    for r in s.execute(standing(select(*cols))
+                       .outerjoin(ReadingsContent,
+                                  Calibration.readings_sha256 == ReadingsContent.sha256)
+                       .where((ReadingsContent.source_sha256 == sha256)
+                              | Calibration.readings_sha256.in_(reduced))).all():
+        found.setdefault(r[0], r)
+        how.setdefault(r[0], "reduced")
     return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3],
-             "same": "file" if r[4] == sha256 else "content"}
+             "same": "file" if r[4] == sha256 else how.get(r[0], "content")}
             for _, r in sorted(found.items())]
 
 
@@ -968,7 +1009,8 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
     a bench's acquired readings), that one measurement is not certified as several: readings
     whose SHA-256 are already those of another calibration that stands, or whose data are
     (the same content digest: the same readings with a newline added, other line ends or
-    metadata lines, rows or columns in another order; :func:`readings_used_by`, ``path``
+    metadata lines, rows or columns in another order), or that were reduced from another's
+    stream or are the stream of another's reduced readings (:func:`readings_used_by`, ``path``
     the file where it is not stored yet) are refused, a one-line GonioError (key :data:`REUSE_KEY`)
     naming that calibration (id, instrument serial, date, state) — unless ``reason`` says
     why they are used again (the web form asks it; the caller audits it). The lineage of one
@@ -981,8 +1023,10 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
     before = readings_used_by(s, sha256, other_than=other_than, path=path)
     if before and not reason:
         first = before[0]
-        how = ("are already those of" if first["same"] == "file" else
-               "hold the same data, written otherwise, as the readings of")
+        how = {"file": "are already those of",
+               "stream": "were reduced from the stream that is the readings of",
+               "reduced": "are the stream reduced to the readings of"}.get(
+            first["same"], "hold the same data, written otherwise, as the readings of")
         raise GonioError(f"these readings (SHA-256 {sha256[:12]}…) {how} "
                          f"calibration {first['id']} ({first['serial']}, "
                          f"{first['performed_on']}, {first['status']})"

@@ -150,6 +150,43 @@ def test_a_parquet_stream_and_its_rows_reordered_digest_alike(tmp_path):
     assert a == b and a != c
 
 
+@pytest.fixture(scope="module")
+def stream_and_reduced(tmp_path_factory):
+    """A simulated stream of the small programme and the readings ``gonio reduce`` makes of
+    it (which name the stream's SHA-256)."""
+    d = tmp_path_factory.mktemp("stream")
+    assert main(["simulate", "--protocol", str(SMALL_PROTOCOL), "--stream", "--seed", "5",
+                 "--out", str(d / "sim")]) == 0
+    stream = d / "sim" / "stream.parquet"
+    reduced = d / "reduced.csv"
+    assert main(["reduce", str(stream), "--protocol", str(SMALL_PROTOCOL), "--out",
+                 str(reduced)]) == 0
+    return stream, reduced
+
+
+@pytest.mark.parametrize("first", ["stream", "reduced"])
+def test_a_stream_and_its_reduced_readings_are_one_measurement(tmp_path, stream_and_reduced,
+                                                              capsys, first):
+    """A stream calibrated, then the readings reduced from it (or the other way round): the
+    second is refused, naming the first calibration; the reduced readings name the stream by
+    its SHA-256 (``# source_stream_sha256``)."""
+    from gonio.atomic import sha256_file
+    from gonio.formats.content import source_sha256
+
+    stream, reduced = stream_and_reduced
+    assert source_sha256(reduced) == sha256_file(stream)
+    data = tmp_path / "data"
+    one, other = (stream, reduced) if first == "stream" else (reduced, stream)
+    argv = ["--protocol", str(SMALL_PROTOCOL), "--record", "--data", str(data)]
+    assert main(["calibrate", str(one), *argv, "--out", str(tmp_path / "a")]) == 0
+    before = _rows(data)
+    err = _refused(["calibrate", str(other), *argv, "--out", str(tmp_path / "b")], capsys)
+    how = ("were reduced from the stream that is the readings of calibration 1 "
+           if first == "stream" else "are the stream reduced to the readings of calibration 1 ")
+    assert how in err and "the same measurement is not calibrated twice" in err, err
+    assert _rows(data) == before
+
+
 @pytest.mark.parametrize("how", ["newline", "metadata", "reversed"])
 def test_calibrate_record_refuses_the_same_data_written_otherwise(tmp_path, bench_readings,
                                                                   capsys, how):

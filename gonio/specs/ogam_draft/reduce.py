@@ -43,6 +43,7 @@ from typing import Iterable, Sequence
 import numpy as np
 import pandas as pd
 
+from gonio.atomic import sha256_file
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_bool, metadata_float
 from gonio.formats.streams import Stream, StreamFile
@@ -536,4 +537,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
     md = {k: v for k, v in st.metadata.items() if k not in ("counter_bits", "counter_signed")}
     if st.path is not None:
         md["source_stream"] = Path(st.path).name
+        # the stream by its bytes: the records know a stream and its readings as one
+        # measurement (gonio.records.services.readings_used_by)
+        md["source_stream_sha256"] = sha256_file(st.path)
     return Reduction(df, ctx.unmatched, ctx.log, rests, ctx.comps, md)

@@ -1,4 +1,7 @@
-"""the readings' content digest, second form (:data:`gonio.formats.content.VERSION` v2): an
+"""the stream a readings file was reduced from (``readings_contents.source_sha256``, the
+stream's SHA-256 as ``gonio reduce`` names it: ``# source_stream_sha256``), so that a stream
+and its reduced readings are one measurement (:func:`gonio.records.services.readings_used_by`);
+and the readings' content digest, second form (:data:`gonio.formats.content.VERSION` v2): an
 integer cell kept whole (a 64-bit counter's counts no longer collapse to 15 digits, which made
 two different streams one), a column with no value in any row no part of the data, lines split
 where the readers split them. Every kept digest is of the first form and would never match a
@@ -11,6 +14,7 @@ Revises: 0014
 Create Date: 2026-12-05 09:30:00
 """
 from alembic import context, op
+import sqlalchemy as sa
 
 
 revision = '0015'
@@ -37,17 +41,35 @@ def _empty() -> None:
 
 
 def upgrade() -> None:
-    import importlib
-
     _empty()
+    op.add_column('readings_contents',
+                  sa.Column('source_sha256', sa.String(length=64), nullable=True))
+    op.create_index(op.f('ix_readings_contents_source_sha256'), 'readings_contents',
+                    ['source_sha256'], unique=False)
     root = context.config.attributes.get("blob_root")
     if root is not None:
-        first = importlib.import_module(
-            "gonio.records.migrations.versions.0014_readings_content")
-        first.backfill(op.get_bind(), root)
+        backfill(op.get_bind(), root)
+
+
+def backfill(bind, root) -> int:
+    """The content digest and source stream of every calibration's readings file present
+    in ``root``; returns the files digested."""
+    from gonio.records.blobs import readings_content, readings_source
+
+    rc = sa.table('readings_contents', sa.column('sha256'), sa.column('content_sha256'),
+                  sa.column('source_sha256'))
+    cals = sa.table('calibrations', sa.column('readings_sha256'))
+    shas = sorted({r[0] for r in bind.execute(sa.select(cals.c.readings_sha256))})
+    done = [{"sha256": sha, "content_sha256": d, "source_sha256": readings_source(root, sha)}
+            for sha in shas if (d := readings_content(root, sha)) is not None]
+    if done:
+        bind.execute(rc.insert(), done)
+    return len(done)
 
 
 def downgrade() -> None:
     # the first form is no longer computed: the older code digests each file again when
     # it first compares it
     _empty()
+    op.drop_index(op.f('ix_readings_contents_source_sha256'), table_name='readings_contents')
+    op.execute("ALTER TABLE readings_contents DROP COLUMN source_sha256")
