@@ -16,9 +16,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import os
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -34,23 +31,14 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, f"{dt:.3f}", gonio.__f
 """
 
 
-def _write_stream():
-    """benchmarks/watermark_memory.py's ``write_stream`` (the same file, the same seed)."""
+def _watermark_benchmark():
+    """benchmarks/watermark_memory.py (its ``write_apart``, the same file for the same seed,
+    and its ``measure``)."""
     spec = importlib.util.spec_from_file_location(
         "watermark_memory", Path(__file__).resolve().parent / "watermark_memory.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    return mod.write_stream
-
-
-def measure(path) -> tuple[int, float, str]:
-    # run outside the repository: ``python -c`` puts the working folder first on sys.path
-    arg = "-" if str(path) == "-" else str(Path(path).resolve())
-    r = subprocess.run([sys.executable, "-c", CHILD, arg], capture_output=True, text=True,
-                       check=True, env=os.environ, cwd=tempfile.gettempdir())
-    rss, dt, where, out = r.stdout.strip().split(" ", 3)
-    print(f"  (gonio from {Path(where).parent})")
-    return int(rss), float(dt), out
+    return mod
 
 
 def main(argv=None) -> None:
@@ -59,6 +47,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--file", type=Path, help="measure this file instead")
     a = ap.parse_args(argv)
+    bench = _watermark_benchmark()
     if a.file:
         d, p = None, a.file
         print(f"measuring {p} ({p.stat().st_size / 1e6:.1f} MB)")
@@ -66,11 +55,11 @@ def main(argv=None) -> None:
         d = Path(tempfile.mkdtemp(prefix="content-mem-"))
         p = d / "real_stream.csv"
         t0 = time.perf_counter()
-        _write_stream()(p, a.rows, a.seed)
+        bench.write_apart(p, a.rows, a.seed)
         print(f"wrote {p} ({p.stat().st_size / 1e6:.1f} MB, {a.rows} rows, seed {a.seed}) "
               f"in {time.perf_counter() - t0:.1f} s")
-    base, _, _ = measure("-")
-    rss, dt, out = measure(p)
+    base, _, _ = bench.measure("-", CHILD)
+    rss, dt, out = bench.measure(p, CHILD)
     print(f"imports only: max RSS {base / 1024:.0f} MB")
     print(f"content_sha256: max RSS {rss / 1024:.0f} MB (+{(rss - base) / 1024:.0f} MB over "
           f"the imports), {dt:.2f} s; digest {out[:16]}…")

@@ -54,10 +54,20 @@ def write_stream(path: Path, rows: int, seed: int) -> None:
             fh.write("".join(f"{x:.3f},{c},{g:.6f}\n" for x, c, g in zip(t, counts, ang)))
 
 
-def measure(path) -> tuple[int, float, object]:
+def write_apart(path: Path, rows: int, seed: int) -> None:
+    """:func:`write_stream` in a process of its own, so that this one stays small: a child
+    starts with its parent's resident size as its maximum (Linux keeps ``ru_maxrss`` across
+    ``fork`` and ``exec``), which would hide the measured process's own peak."""
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--write", str(path),
+                    "--rows", str(rows), "--seed", str(seed)], check=True)
+
+
+def measure(path, child: str = CHILD) -> tuple[int, float, object]:
+    """(max RSS in kB, seconds, what it returned) of ``child`` run on ``path`` ("-": the
+    imports only) in a fresh process; the child prints them and gonio's place."""
     # run outside the repository: ``python -c`` puts the working folder first on sys.path
     arg = "-" if str(path) == "-" else str(Path(path).resolve())
-    r = subprocess.run([sys.executable, "-c", CHILD, arg],
+    r = subprocess.run([sys.executable, "-c", child, arg],
                        capture_output=True, text=True, check=True, env=os.environ,
                        cwd=tempfile.gettempdir())
     rss, dt, where, out = r.stdout.strip().split(" ", 3)
@@ -71,7 +81,11 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--keep", action="store_true", help="keep the temporary folder")
     ap.add_argument("--file", type=Path, help="measure this file (one --keep left) instead")
+    ap.add_argument("--write", type=Path, help=argparse.SUPPRESS)   # write_apart's child
     a = ap.parse_args(argv)
+    if a.write:
+        write_stream(a.write, a.rows, a.seed)
+        return
     if a.file:
         d, p = None, a.file
         print(f"measuring {p} ({p.stat().st_size / 1e6:.1f} MB)")
@@ -79,7 +93,7 @@ def main(argv=None) -> None:
         d = Path(tempfile.mkdtemp(prefix="wm-mem-"))
         p = d / "real_stream.csv"
         t0 = time.perf_counter()
-        write_stream(p, a.rows, a.seed)
+        write_apart(p, a.rows, a.seed)
         print(f"wrote {p} ({p.stat().st_size / 1e6:.1f} MB, {a.rows} rows, seed {a.seed}) "
               f"in {time.perf_counter() - t0:.1f} s")
     base, _, _ = measure("-")

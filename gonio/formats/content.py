@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gonio.errors import GonioError
 from gonio.formats.metadata import header_lines, is_comment
 from gonio.formats.watermark import canonical
 
@@ -180,8 +181,6 @@ def source_sha256(path: str | Path) -> str | None:
     >>> source_sha256(a) == "ab" * 32, source_sha256(b) is None
     (True, True)
     """
-    from gonio.errors import GonioError
-
     path = Path(path)
     try:
         with open(path, "rb") as fh:

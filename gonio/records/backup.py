@@ -633,15 +633,10 @@ def _fill_content(store, rows: dict) -> None:
     """The readings' content digests and source streams as the restored files give them,
     never as the archive states them (an archive's digest could hide readings calibrated
     twice): every calibration's readings file digested
-    (:func:`gonio.records.blobs.readings_content`, :func:`~gonio.records.blobs.readings_source`)."""
-    from gonio.records.blobs import readings_content, readings_source
-
+    (:func:`gonio.records.blobs.content_rows`)."""
     stored = {b.get("sha256") for b in rows["blobs"]}
     shas = sorted({c.get("readings_sha256") for c in rows["calibrations"]} & stored)
-    rows["readings_contents"] = [
-        {"sha256": sha, "content_sha256": d,
-         "source_sha256": readings_source(store.blob_root, sha)}
-        for sha in shas if (d := readings_content(store.blob_root, sha)) is not None]
+    rows["readings_contents"] = blobs.content_rows(store.blob_root, shas)
 
 
 def check_summary(rows: dict) -> dict:

@@ -136,11 +136,25 @@ def readings_content(root: str | os.PathLike, sha256: str) -> str | None:
         return None
 
 
-def readings_source(root: str | os.PathLike, sha256: str) -> str | None:
-    """The SHA-256 of the stream the stored readings file ``sha256`` was reduced from
-    (:func:`gonio.formats.content.source_sha256`); None where it names none or is not
-    stored."""
+def readings_facts(root: str | os.PathLike, sha256: str) -> tuple[str | None, str | None]:
+    """(content digest, the SHA-256 of the stream it was reduced from) of the stored
+    readings file ``sha256`` (:func:`readings_content`,
+    :func:`gonio.formats.content.source_sha256`); (None, None) where it is not stored."""
     from gonio.formats.content import source_sha256
 
     src = blob_path(root, sha256)
-    return source_sha256(src) if src.is_file() else None
+    if not src.is_file():
+        return None, None
+    return readings_content(root, sha256), source_sha256(src)
+
+
+def content_rows(root: str | os.PathLike, shas) -> list[dict]:
+    """The ``readings_contents`` rows of the stored readings files ``shas`` that hold a
+    table (:func:`readings_facts`): ``{"sha256", "content_sha256", "source_sha256"}``, in the
+    order given (a migration's backfill, a restore)."""
+    rows = []
+    for sha in shas:
+        digest, source = readings_facts(root, sha)
+        if digest is not None:
+            rows.append({"sha256": sha, "content_sha256": digest, "source_sha256": source})
+    return rows

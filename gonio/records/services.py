@@ -909,17 +909,12 @@ def readings_content_of(s: Session, sha256: str, path=None) -> str | None:
     return _content_row(s, sha256, path)[0]
 
 
-def readings_source_of(s: Session, sha256: str, path=None) -> str | None:
-    """The SHA-256 of the stream the readings file ``sha256`` was reduced from, as the file
-    names it (``# source_stream_sha256``, :func:`gonio.formats.content.source_sha256`): kept
-    beside its content digest (:func:`readings_content_of`); None where it names none."""
-    return _content_row(s, sha256, path)[1]
-
-
 def _content_row(s: Session, sha256: str, path=None) -> tuple[str | None, str | None]:
-    """(content digest, source stream's SHA-256) of the file ``sha256``: its row of
-    ``readings_contents``, else computed from ``path`` or the store's file and kept where
-    ``s`` writes and the file is stored (:func:`readings_content_of`)."""
+    """(content digest, the SHA-256 of the stream the file was reduced from, as it names it:
+    ``# source_stream_sha256``, :func:`gonio.formats.content.source_sha256`) of the file
+    ``sha256``: its row of ``readings_contents``, else computed from ``path`` or the store's
+    file (:func:`gonio.records.blobs.readings_facts`) and kept where ``s`` writes and the
+    file is stored (:func:`readings_content_of`)."""
     row = s.get(ReadingsContent, sha256)
     if row is not None:
         return row.content_sha256, row.source_sha256
@@ -934,8 +929,7 @@ def _content_row(s: Session, sha256: str, path=None) -> tuple[str | None, str | 
     elif root is None:
         digest = source = None
     else:
-        digest = blobs.readings_content(root, sha256)
-        source = blobs.readings_source(root, sha256)
+        digest, source = blobs.readings_facts(root, sha256)
     if digest is not None and _writes(s) and s.get(Blob, sha256) is not None:
         s.add(ReadingsContent(sha256=sha256, content_sha256=digest, source_sha256=source))
     return digest, source
@@ -947,7 +941,7 @@ def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
     file ``sha256``, hold its data written otherwise (the same content digest,
     :func:`readings_content_of`: a newline, line ends, metadata lines, the order of rows or
     columns, a number's spelling), are the stream it was reduced from (``"stream"``: the
-    file names that stream's SHA-256, :func:`readings_source_of`) or were reduced from it
+    file names that stream's SHA-256, :func:`_content_row`) or were reduced from it
     (``"reduced"``: the file is their stream), less ``other_than``: ``[{"id", "serial",
     "performed_on", "status", "same": "file" | "content" | "stream" | "reduced"}]``, oldest
     first. ``path``: the readings file itself, where it is not in the store yet."""
@@ -958,15 +952,22 @@ def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
 
     cols = (Calibration.id, Instrument.serial, Calibration.performed_on, Calibration.status,
             Calibration.readings_sha256)
-    found = {r[0]: r for r in s.execute(standing(select(*cols)).where(
-        Calibration.readings_sha256 == sha256)).all()}
-    content, source = _content_row(s, sha256, path)
-    how = {}
-    if source is not None:          # readings reduced from a stream a calibration used
-        for r in s.execute(standing(select(*cols)).where(
-                Calibration.readings_sha256 == source)).all():
+    found, how = {}, {}
+
+    def add(where, label: str) -> None:
+        """The standing calibrations whose readings (their digest row joined) meet
+        ``where``, as ``label`` says they are the same measurement."""
+        for r in s.execute(standing(select(*cols))
+                           .outerjoin(ReadingsContent,
+                                      Calibration.readings_sha256 == ReadingsContent.sha256)
+                           .where(where)).all():
             found.setdefault(r[0], r)
-            how.setdefault(r[0], "stream")
+            how.setdefault(r[0], label)
+
+    add(Calibration.readings_sha256 == sha256, "file")
+    content, source = _content_row(s, sha256, path)
+    if source is not None:          # readings reduced from a stream a calibration used
+        add(Calibration.readings_sha256 == source, "stream")
     # a standing calibration's readings not yet digested (an older store, a restore):
     # digested now (and kept where ``s`` writes), compared by digest and by source
     fresh, reduced = set(), set()
@@ -983,22 +984,13 @@ def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None,
     if _writes(s):
         s.flush()
     if content is not None:
-        for r in s.execute(standing(select(*cols))
-                           .outerjoin(ReadingsContent,
-                                      Calibration.readings_sha256 == ReadingsContent.sha256)
-                           .where((ReadingsContent.content_sha256 == content)
-                                  | Calibration.readings_sha256.in_(fresh))).all():
-            found.setdefault(r[0], r)
+        add((ReadingsContent.content_sha256 == content)
+            | Calibration.readings_sha256.in_(fresh), "content")
     # a stream whose reduced readings a calibration used
-    for r in s.execute(standing(select(*cols))
-                       .outerjoin(ReadingsContent,
-                                  Calibration.readings_sha256 == ReadingsContent.sha256)
-                       .where((ReadingsContent.source_sha256 == sha256)
-                              | Calibration.readings_sha256.in_(reduced))).all():
-        found.setdefault(r[0], r)
-        how.setdefault(r[0], "reduced")
+    add((ReadingsContent.source_sha256 == sha256)
+        | Calibration.readings_sha256.in_(reduced), "reduced")
     return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3],
-             "same": "file" if r[4] == sha256 else how.get(r[0], "content")}
+             "same": "file" if r[4] == sha256 else how[r[0]]}
             for _, r in sorted(found.items())]
 
 

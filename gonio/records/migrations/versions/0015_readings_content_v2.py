@@ -54,14 +54,13 @@ def upgrade() -> None:
 def backfill(bind, root) -> int:
     """The content digest and source stream of every calibration's readings file present
     in ``root``; returns the files digested."""
-    from gonio.records.blobs import readings_content, readings_source
+    from gonio.records.blobs import content_rows
 
     rc = sa.table('readings_contents', sa.column('sha256'), sa.column('content_sha256'),
                   sa.column('source_sha256'))
     cals = sa.table('calibrations', sa.column('readings_sha256'))
     shas = sorted({r[0] for r in bind.execute(sa.select(cals.c.readings_sha256))})
-    done = [{"sha256": sha, "content_sha256": d, "source_sha256": readings_source(root, sha)}
-            for sha in shas if (d := readings_content(root, sha)) is not None]
+    done = content_rows(root, shas)
     if done:
         bind.execute(rc.insert(), done)
     return len(done)
