@@ -60,3 +60,29 @@ def test_records_form_digits(typed):
         check_readings(facts, inst, "ogam-draft", temp, None)
     assert f"the readings say 20.0 °C (# temperature_c), what was entered {typed} °C " \
            "(more than 1 °C apart)" in str(e.value)
+
+
+@pytest.mark.parametrize("written", ["30,0", "30 °C", "303.15 K", "３０"])
+@pytest.mark.parametrize("with_lab", [True, False])
+def test_a_room_temperature_no_number_is_refused(tmp_path, shared_simulation, capsys,
+                                                 written, with_lab):
+    """The optical readings' ``# room_temperature_c`` written so that it is no number: refused
+    in one line (exit 2) whether a laboratory file's temperature would be compared with it
+    or the certificate would state it — never passed unread, never printed as written."""
+    from gonio.cli import main
+
+    sim = shared_simulation("ogam-draft")
+    text = (sim / "readings.csv").read_text(encoding="utf-8")
+    body = "".join(ln for ln in text.splitlines(keepends=True)
+                   if not ln.startswith("# temperature_c"))
+    readings = tmp_path / "r.csv"
+    readings.write_text(f"# room_temperature_c: {written}\n" + body, encoding="utf-8")
+    lab = tmp_path / "lab.toml"
+    lab.write_text(LAB.replace("[environment]\n", "[instrument]\nserial = \"RLG-0001\"\n"
+                               "[environment]\n") + "temperature_c = 20.1\n", encoding="utf-8")
+    argv = ["calibrate", str(readings), "--out", str(tmp_path / "out")]
+    rc = main(argv + (["--lab", str(lab)] if with_lab else []))
+    err = capsys.readouterr().err
+    assert rc == 2 and "key room_temperature_c: expected a number" in err, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out" / "certificate.html").exists()

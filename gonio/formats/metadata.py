@@ -36,6 +36,9 @@ NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "nominal_scale_factor_counts_per_deg": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
     "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
     "temperature_c": (-273.15, False, 1000.0, "a number in (-273.15, 1000]"),
+    # the room's temperature where a file states it apart from the instrument's (compared
+    # with the laboratory file's: a text that is no number would pass unread)
+    "room_temperature_c": (-273.15, False, 1000.0, "a number in (-273.15, 1000]"),
     "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
     "table_mpe_arcsec": (0.0, True, 180 * ARCSEC_PER_DEG, "a number in [0, 648000]"),
     "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),

@@ -94,6 +94,13 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
 
     >>> contradictions({"room_temperature_c": "22.5"}, lab, None, ("temperature_c",))
     []
+
+    A stated condition that is no number is refused, never passed as silent:
+
+    >>> contradictions({"temperature_c": "30,0"}, lab)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key temperature_c: expected a number (°C), got '30,0': the temperature the readings state cannot be compared with the laboratory file's
     """
     if not lab:
         return []
@@ -120,7 +127,12 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
         tol = default if tol is None else float(tol)
         for k, text, where in stated:
             ours = parse_number(text)
-            if ours is None or not math.isfinite(ours) or abs(float(theirs) - ours) <= tol:
+            if ours is None or not math.isfinite(ours):
+                # a condition that cannot be read cannot be compared: never passed unread
+                raise GonioError(f"expected a number ({unit}), got {text!r}: the {what} the "
+                                 "readings state cannot be compared with the laboratory "
+                                 "file's", key=k)
+            if abs(float(theirs) - ours) <= tol:
                 continue
             out.append({"what": what, "key": k, "readings": f"{condition_text(text)} {unit}",
                         "lab": f"{condition_text(theirs)} {unit}", "lab_key": f"{section}.{key}",
@@ -269,8 +281,11 @@ def check_identity(readings, lab: dict | None, *, lab_file=None,
     that state the room temperature (a specification's ``room_temperature_keys``)."""
     md = readings_metadata(readings) if lab or record or named else {}
     seen = measured(readings) if measured is not None and lab else None
-    found = contradictions(md, lab, seen, temperature_keys) + \
-        record_contradictions(md, lab, record)
+    try:
+        found = contradictions(md, lab, seen, temperature_keys)
+    except GonioError as exc:            # a condition no number: named with its file
+        raise GonioError(exc.message, file=Path(readings).name, key=exc.key) from None
+    found += record_contradictions(md, lab, record)
     found += named_contradictions(md, {Path(p).name: readings_metadata(p) for p in named},
                                   lab, record, Path(readings).name)
     if not found:

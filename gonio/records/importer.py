@@ -328,6 +328,7 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
         return {}
     details = load_lab_file(lab, get(spec_key)) if lab is not None else None
     found = check_identity(rd, details, lab_file=lab, record=record, named=named,
+                           measured=get(spec_key).measured_conditions,
                            temperature_keys=get(spec_key).room_temperature_keys)
     stated = {str(f.get("message")) for f in results.get("findings") or []
               if isinstance(f, dict) and f.get("code") == MISMATCH_CODE}

@@ -239,7 +239,8 @@ def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None 
     if not isinstance(res, dict) and readings_sha256:
         from gonio.records.submission import readings_facts
         try:
-            res = {"metadata": readings_facts(store, readings_sha256)["metadata"]}
+            res = {"metadata": readings_facts(store, readings_sha256,
+                                                  conditions=False)["metadata"]}
         except GonioError:
             return ""
     if not isinstance(res, dict) or not result_provenance(res)["virtual"]:

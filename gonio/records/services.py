@@ -2111,34 +2111,41 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
     from gonio.records.compute import readings_file
     from gonio.specs import get
 
+    from gonio.pipeline.identity import contradictions
+
     if not from_readings and temp is None:
         return None
-    room_keys = get(cal.spec_key).room_temperature_keys   # IEC's room_temperature_c is T_BASE
+    spec = get(cal.spec_key)
+    room_keys = spec.room_temperature_keys   # IEC's room_temperature_c is T_BASE
     src = blobs.blob_path(store.blob_root, cal.readings_sha256)
     if not src.is_file():
         raise GonioError("the calibration's readings are not in the store", key="readings")
     # a bench calibration's readings not acquired yet (its request): no metadata lines
     with readings_file(src) as path:
         md = readings_metadata(path)
-    if not from_readings:
-        from gonio.pipeline.identity import contradictions
-        found = contradictions(md, {"environment": {"temperature_c": temp,
-                                                    "humidity_pct": hum}}, None, room_keys)
-        if found:
-            c = found[0]
-            raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
-                             f"entered {c['lab']}: enter the conditions of these readings",
-                             key="environment")
-        return temp, hum, entered_in
-    got = []
-    for keys, what, lo, hi in ((room_keys, "temperature", -50, 100),
-                               (("humidity_pct",), "humidity", 0, 100)):
-        v = next((md[k] for k in keys if str(md.get(k, "")).strip()), None)
-        if v is None:
-            raise GonioError(f"the readings state no {what} (# {keys[0]}): enter the "
-                             "environment", key="environment")
-        got.append(condition_value(str(v), f"readings' # {keys[0]}", lo, hi))
-    return got[0], got[1], "readings"
+        # what the readings measured (a logged room temperature) is compared as the
+        # calibration pipeline compares it, whatever the metadata line says or where it is gone
+        measured = spec.measured_conditions(path) if (
+            spec.measured_conditions is not None and md) else None
+    if from_readings:
+        got = []
+        for keys, what, lo, hi in ((room_keys, "temperature", -50, 100),
+                                   (("humidity_pct",), "humidity", 0, 100)):
+            v = next((md[k] for k in keys if str(md.get(k, "")).strip()), None)
+            if v is None:
+                raise GonioError(f"the readings state no {what} (# {keys[0]}): enter the "
+                                 "environment", key="environment")
+            got.append(condition_value(str(v), f"readings' # {keys[0]}", lo, hi))
+        temp, hum = got
+    found = contradictions(md, {"environment": {"temperature_c": temp, "humidity_pct": hum}},
+                           measured, room_keys)
+    if found:
+        c = found[0]
+        said = "their metadata say" if from_readings else "entered"
+        raise GonioError(f"{c['what']}: the readings say {c['readings']} "
+                         f"({c.get('where') or '# ' + c['key']}), {said} {c['lab']}: "
+                         "enter the conditions of these readings", key="environment")
+    return temp, hum, (entered_in if not from_readings else "readings")
 
 
 def missing_for_review(s: Session, cal: Calibration) -> list[str]:

@@ -51,10 +51,12 @@ SNIFF_BYTES = 256 * 1024
 REUSE_KEY = services.REUSE_KEY
 
 
-def readings_facts(store, sha256: str) -> dict:
+def readings_facts(store, sha256: str, *, conditions: bool = True) -> dict:
     """What a stored readings file is: ``{"format": "parquet" | "csv", "metadata": {...},
-    "spec": key or None, "spec_from": the metadata line that named it}``; a file that is no
-    readings file is a GonioError (key ``readings``) saying what it looks like."""
+    "spec": key or None, "spec_from": the metadata line that named it, "measured": what the
+    readings measured of their conditions (the specification's ``measured_conditions``; {}
+    where ``conditions`` is false or it measures none)}``; a file that is no readings file is
+    a GonioError (key ``readings``) saying what it looks like."""
     from gonio.formats.provenance import readings_metadata
     from gonio.pipeline.dispatch import readings_spec
     from gonio.records.compute import readings_file, readings_suffix
@@ -68,20 +70,24 @@ def readings_facts(store, sha256: str) -> dict:
     suffix = readings_suffix(head)
     if suffix == ".csv":
         _looks_like_csv(head)
+    from gonio.specs import available, get
+
     with readings_file(src) as path:
         try:
             md = readings_metadata(path)
             spec = readings_spec(path)
+            spec_from = "# spec" if md.get("spec") else "# format" if spec else ""
+            if spec is None and str(md.get("protocol", "")).strip() in available():
+                spec, spec_from = str(md["protocol"]).strip(), "# protocol"
+            # what the readings measured of their conditions (a logged room temperature),
+            # compared by check_readings as the calibration compares it
+            measured = get(spec).measured_conditions if spec in available() else None
+            measured = measured(path) if conditions and measured is not None and md else {}
         except GonioError as exc:
             raise GonioError(f"the readings file cannot be read: {exc.message}",
                              key="readings") from None
-    spec_from = "# spec" if md.get("spec") else "# format" if spec else ""
-    if spec is None:
-        from gonio.specs import available
-
-        if str(md.get("protocol", "")).strip() in available():
-            spec, spec_from = str(md["protocol"]).strip(), "# protocol"
-    return {"format": suffix[1:], "metadata": md, "spec": spec, "spec_from": spec_from}
+    return {"format": suffix[1:], "metadata": md, "spec": spec, "spec_from": spec_from,
+            "measured": measured}
 
 
 def _looks_like_csv(head: bytes) -> None:
@@ -133,14 +139,19 @@ def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=N
     record = {"instrument": {"serial": inst.serial, "model": inst.model,
                              "manufacturer": inst.manufacturer, "gyro_type": inst.gyro_type},
               "environment": {"temperature_c": temperature_c, "humidity_pct": humidity_pct}}
-    found = contradictions(facts["metadata"], record)
+    from gonio.specs import get
+
+    # the room's temperature by the specification's keys (IEC's room_temperature_c is its
+    # chamber's base temperature) and by what the readings measured, as the pipeline compares
+    found = contradictions(facts["metadata"], record, facts.get("measured") or None,
+                           get(spec_key).room_temperature_keys)
     if found:
         c = found[0]
         where = ("the instrument's record" if c["lab_key"].startswith("instrument")
                  else "what was entered")
         tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
-        said = (f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
-                f"{where} {c['lab']}{tol}")
+        said = (f"{c['what']}: the readings say {c['readings']} "
+                f"({c.get('where') or '# ' + c['key']}), {where} {c['lab']}{tol}")
         raise GonioError(f"{first_of([said, *found[1:]])}: these readings are not of this "
                          "instrument or these conditions", key="readings")
 
