@@ -10,6 +10,7 @@ error and a move beyond the range stop the table (or never move it).
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -181,6 +182,25 @@ def test_driver_errors_come_from_the_served_error_queue(served):
     r = gyro.read(90.0 * 76434.87)
     assert r.counts / 76434.87 == pytest.approx(90.0, abs=2.0)  # plus the Earth rate since zero
     assert table.position_deg() == 90.0
+
+
+# ------------------------------------------------------------------ what --meta may add
+@pytest.mark.parametrize("given, said", [
+    ({"serial": "RLG-0999"}, "key serial: the instruments state 'RLG-0001', given 'RLG-0999'"),
+    ({"manufacturer": "ACME"}, "key manufacturer: the instruments state 'gonio virtual bench'"),
+    ({"gyro_idn": "ACME,G1,RLG-0001,2"}, "key gyro_idn: the instruments state 'gonio virtual "
+                                         "bench,RLG goniometer (virtual)"),
+    ({"chamber_idn": "ACME,CH"}, "key chamber_idn: no instrument answered as it"),
+])
+def test_given_metadata_never_replaces_what_the_instruments_report(served, tmp_path, given,
+                                                                  said):
+    """A laboratory's ``--meta`` adds lines; the serial, maker or ``*IDN?`` answer the
+    instruments gave stay theirs (the virtual bench's identification keeps its readings
+    virtual, and a certificate names the instrument that answered)."""
+    with pytest.raises(GonioError, match=re.escape(said)):
+        acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource,
+                tmp_path / "acq", metadata={**META, **given})
+    assert not (tmp_path / "acq" / "readings.csv").exists()
 
 
 # ------------------------------------------------------------------ whole programme

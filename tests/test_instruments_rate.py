@@ -110,6 +110,25 @@ def _cli_acquire(res: dict, out: Path, proto: Path, b, *extra) -> list[str]:
             *[x for m in _meta(b) for x in ("--meta", m)], *extra]
 
 
+@pytest.mark.parametrize("given", ["serial=SN-7777", "gyro_idn=ACME,G-610,SN-7777,1.0",
+                                   "supply_idn=ACME,PS"])
+def test_given_metadata_never_replaces_the_rate_instruments_answers(bench, proto, tmp_path,
+                                                                    capsys, given):
+    """``--meta`` adds to what the rate instruments reported (their ``*IDN?`` answers, the
+    gyro's serial), never replaces it: refused in one line before the programme, no readings."""
+    served = serve_rate_bench(bench, speed=SPEED, seed=SEED)
+    try:
+        rc = main(_cli_acquire(served.resources, tmp_path / "acq", proto, bench,
+                               "--meta", given))
+    finally:
+        served.close()
+    err = capsys.readouterr().err
+    key = given.split("=")[0]
+    assert rc == 2 and f"key {key}: " in err and "never replace it" in err, err
+    assert "Traceback" not in err
+    assert not (tmp_path / "acq" / "readings.csv").exists()
+
+
 def test_jjf_programme_through_the_instruments_calibrates_like_simulate(bench, proto, simulated,
                                                                         tmp_path):
     served = serve_rate_bench(bench, speed=SPEED, seed=SEED)

@@ -43,6 +43,7 @@ from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import COLUMNS as RATE_COLUMNS
 from gonio.instruments.run import (ModuleClock, ReadingsFile, laboratory_date_text, raise_stop,
+                                  with_given_metadata,
                                   stop_reason)
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.rate import Chamber, GyroOutput, RateTable, Supply
@@ -269,7 +270,10 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
             drv.clear()                  # first: an error left by an earlier session
             md[f"{role}_idn"] = drv.identify()
         check_rate_programme(segments, d["table"])
-        md.update(_stated(d["gyro"], metadata))
+        md = with_given_metadata(    # an *_idn given must be the instrument's own answer
+            {**md, **_stated(d["gyro"], {k: v for k, v in metadata.items()
+                                         if not k.endswith("_idn")})},
+            {k: v for k, v in metadata.items() if k.endswith("_idn")})
         md.update({"date": laboratory_date_text(zone=str(md.get("timezone") or "")),
                    "generator": f"gonio {__version__} acquire"})
         writer = ReadingsFile(path, md, rows, columns=RATE_COLUMNS)
@@ -315,8 +319,9 @@ def _stated(gyro: GyroOutput, metadata: dict) -> dict:
         v = gyro.stated(op)
         if v is not None:
             md[key] = v
-    md.update({k: str(v) for k, v in metadata.items() if v is not None})
-    return md
+    # the hook's lines add to what the instruments reported (their *IDN? answers, written
+    # before), never replace it
+    return with_given_metadata(md, {k: str(v) for k, v in metadata.items() if v is not None})
 
 
 def _safe_off(d: dict, log: IOLog) -> None:

@@ -1,8 +1,9 @@
 """What every acquisition through the instruments shares: the readings file written as the
 readings come (:class:`ReadingsFile`), waits timed on the instrument's own clock
 (:class:`ModuleClock`), what a run left (:class:`AcquisitionResult`), how a stop is told
-(:func:`raise_stop`, :func:`stop_reason`) and the readings' ``# date:``
-(:func:`laboratory_date_text`).
+(:func:`raise_stop`, :func:`stop_reason`), the readings' ``# date:``
+(:func:`laboratory_date_text`) and the metadata an acquisition's caller may add
+(:func:`with_given_metadata`).
 
 Used by :mod:`gonio.instruments.rate_acquire` (a rate specification's segment programme) and
 by a specification that runs its own programme through its ``acquire`` hook (the goniometer's
@@ -19,6 +20,49 @@ from pathlib import Path
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError
+
+
+#: Metadata keys that state what the instruments reported of themselves or what gonio measured
+#: and wrote (besides every ``*_idn``, an instrument's own ``*IDN?`` answer): a caller's
+#: metadata (``gonio acquire --meta``, the records' bench form) may add them where the
+#: instruments are silent, never replace them — a certificate names the instrument the
+#: bench answered as, and the virtual bench's identification keeps its readings virtual.
+REPORTED_KEYS = frozenset({"instrument", "model", "serial", "manufacturer", "table",
+                           "generator", "temperature_c"})
+
+
+def with_given_metadata(md: dict, given: dict | None) -> dict:
+    """``md`` (what the acquisition wrote from the instruments) with the caller's ``given``
+    lines added; a given key of :data:`REPORTED_KEYS` or an ``*_idn`` that the instruments
+    stated otherwise is a GonioError naming the key (``--meta``).
+
+    >>> with_given_metadata({"serial": "A-1", "latitude_deg": "40"}, {"latitude_deg": "39.9",
+    ...                                                              "serial": " A-1"})
+    {'serial': 'A-1', 'latitude_deg': '39.9'}
+    >>> with_given_metadata({"serial": ""}, {"serial": "A-1"})
+    {'serial': 'A-1'}
+    >>> with_given_metadata({"gyro_idn": "gonio virtual bench,RLG (virtual),RLG-0001"},
+    ...                     {"gyro_idn": "ACME,RLG,7"})
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key gyro_idn: the instruments state 'gonio virtual bench,RLG (virtual),RLG-0001', given 'ACME,RLG,7': metadata given to an acquisition add to what the instruments report, never replace it
+    """
+    out = dict(md)
+    for key, value in (given or {}).items():
+        if value is None:
+            continue
+        ours = str(md.get(key) or "").strip()
+        idn = key.endswith("_idn")        # only an instrument's own answer is its *IDN?
+        if (key in REPORTED_KEYS and ours) or idn:
+            if ours != str(value).strip():
+                said = f"the instruments state {ours!r}" if ours else \
+                    "no instrument answered as it"
+                raise GonioError(f"{said}, given {str(value).strip()!r}: metadata given to an "
+                                 "acquisition add to what the instruments report, never "
+                                 "replace it", key=key)
+            continue                      # the same: the instruments' text kept
+        out[key] = value
+    return out
 
 
 def laboratory_date_text(at: _dt.datetime | None = None, zone: str = "") -> str:

@@ -55,6 +55,10 @@ def check_request(resources: dict, metadata: dict) -> dict:
         key = services.text(k, "metadata key", max_len=64)
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", key):
             raise GonioError(f"metadata key {key!r}: letters, digits and '_'", key="metadata")
+        if key.endswith("_idn") or key == "generator":
+            raise GonioError(f"metadata key {key!r}: the instruments' own answer and the "
+                             "acquisition write it, never the form "
+                             "(gonio.instruments.run.with_given_metadata)", key="metadata")
         md[key] = services.text(v, f"metadata {key}")
     return {"gonio_bench_request": 1, "resources": res, "metadata": md}
 

@@ -44,6 +44,7 @@ from gonio import __version__
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.acquisition_module import AcquisitionModule
 from gonio.instruments.run import (AcquisitionResult, ModuleClock, ReadingsFile,
+                                  with_given_metadata,
                                   laboratory_date_text, raise_stop, stop_reason)
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.table import RotaryTable, TableLimits
@@ -489,7 +490,7 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         lim = table.limits()
         check_programme(blocks, protocol, lim)
         md.update(_instrument_metadata(protocol, gyro, lim))
-        md.update(metadata or {})
+        md = with_given_metadata(md, metadata)    # adds, never replaces what was reported
         if md.get("timezone") and not (metadata or {}).get("date"):   # the laboratory's zone
             md["date"] = laboratory_date_text(zone=str(md["timezone"]))
         writer = ReadingsFile(path, md, rows, COLUMNS)
