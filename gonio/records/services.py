@@ -2106,12 +2106,12 @@ def standard_names(s: Session, cal_id: int) -> list[str]:
 def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
                     entered_in: str = ""):
     """(temperature, humidity, environment_from) to record, or None: taken from the readings'
-    metadata, or as entered after comparing it with what the readings state."""
+    metadata, or as entered; either compared with what the readings state and what they
+    measured (the specification's ``measured_conditions``), as ``gonio calibrate`` compares."""
     from gonio.formats.provenance import readings_metadata
+    from gonio.pipeline.identity import contradictions
     from gonio.records.compute import readings_file
     from gonio.specs import get
-
-    from gonio.pipeline.identity import contradictions
 
     if not from_readings and temp is None:
         return None
