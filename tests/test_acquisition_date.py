@@ -54,7 +54,7 @@ def test_every_acquisition_writes_that_date(module):
     """Both acquisitions (the rate programmes' and the optical draft's) take their ``# date:``
     from it, in the readings' ``timezone`` where given, none from a UTC clock."""
     text = (ROOT / module).read_text(encoding="utf-8")
-    assert "laboratory_date_text(zone=str(md" in text
+    assert "laboratory_date_text(zone=" in text
     assert "timezone.utc" not in text
 
 

@@ -191,6 +191,7 @@ def test_driver_errors_come_from_the_served_error_queue(served):
     ({"gyro_idn": "ACME,G1,RLG-0001,2"}, "key gyro_idn: the instruments state 'gonio virtual "
                                          "bench,RLG goniometer (virtual)"),
     ({"chamber_idn": "ACME,CH"}, "key chamber_idn: no instrument answered as it"),
+    ({"date": "1999-01-01"}, "key date: the instruments state '20"),
 ])
 def test_given_metadata_never_replaces_what_the_instruments_report(served, tmp_path, given,
                                                                   said):

@@ -111,7 +111,7 @@ def _cli_acquire(res: dict, out: Path, proto: Path, b, *extra) -> list[str]:
 
 
 @pytest.mark.parametrize("given", ["serial=SN-7777", "gyro_idn=ACME,G-610,SN-7777,1.0",
-                                   "supply_idn=ACME,PS"])
+                                   "supply_idn=ACME,PS", "date=1999-01-01"])
 def test_given_metadata_never_replaces_the_rate_instruments_answers(bench, proto, tmp_path,
                                                                     capsys, given):
     """``--meta`` adds to what the rate instruments reported (their ``*IDN?`` answers, the

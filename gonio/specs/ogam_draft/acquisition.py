@@ -490,9 +490,10 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         lim = table.limits()
         check_programme(blocks, protocol, lim)
         md.update(_instrument_metadata(protocol, gyro, lim))
+        zone = str((metadata or {}).get("timezone") or "")
+        if zone:                                   # the date in the laboratory's zone
+            md["date"] = laboratory_date_text(zone=zone)
         md = with_given_metadata(md, metadata)    # adds, never replaces what was reported
-        if md.get("timezone") and not (metadata or {}).get("date"):   # the laboratory's zone
-            md["date"] = laboratory_date_text(zone=str(md["timezone"]))
         writer = ReadingsFile(path, md, rows, COLUMNS)
         return _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start)
     except BaseException as exc:
