@@ -156,7 +156,9 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
             "pfa": (display("sig2", 100.0 * pfa) + " %" if pfa is not None
                     else "≤ " + display("sig2", 100.0 * g("false_accept_bound")) + " %"
                     if g("false_accept_bound") is not None else "—"),
-            "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else "",
+            # the probability of conformance's own digits (the column beside it, summary.txt):
+            # one number, never 99 % beside 98.5 %
+            "pfr": L["c_pfr"].format(v=display("sig3", 100.0 * pfr)) if pfr is not None else "",
             "no_p": model if g("outcome") and g("conformance_probability") is None
             and model.startswith("not given") else "",
             "measured": measured_clause(c)}
@@ -245,9 +247,13 @@ def interval_legend(items: dict, L: dict) -> str:
 
     kinds: dict[str, list[str]] = {}
     lines_of: dict[str, str] = {}
+    p_of: dict[str, set] = {}             # each kind's stated probabilities
     for it in items.values():
         kind = interval_kind(it) if isinstance(it, dict) else None
         clause = conv(str(it.get("clause") or ""))
+        if kind:
+            p_of.setdefault(kind, set()).add((it.get("uncertainty") or {})
+                                             .get("coverage_probability"))
         if kind in BOUND_KINDS and clause:
             lines_of.setdefault(clause, bounded_lines_text(it, L))
         if kind and clause not in kinds.setdefault(kind, []):     # each clause once
@@ -265,7 +271,14 @@ def interval_legend(items: dict, L: dict) -> str:
         return ("；" if zh else "; ").join(", ".join(g) + (("：" if zh else ": ") + w if w else "")
                                           for w, g in groups.items())
 
-    parts = [L[f"k_iv_{k}"] + (L["k_iv_clauses"].format(c=clauses(k)) if any(kinds[k]) else "")
+    def legend(k: str) -> str:    # the kind's text at its items' probability where all
+        ps = p_of.get(k, set())      # state one other than 95 % (the triad's 95.45 %)
+        p = next(iter(ps)) if len(ps) == 1 else None
+        if isinstance(p, (int, float)) and abs(p - 0.95) > 1e-9:
+            return L[f"k_iv_{k}"].replace("95 %", display("sig4", 100.0 * p) + " %")
+        return L[f"k_iv_{k}"]
+
+    parts = [legend(k) + (L["k_iv_clauses"].format(c=clauses(k)) if any(kinds[k]) else "")
              for k in INTERVAL_KINDS if k in kinds]
     return L["k_iv_head"].format(kinds=("；" if zh else "; ").join(parts))
 

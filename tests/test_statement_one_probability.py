@@ -1,0 +1,42 @@
+"""One probability, one number: a rejected item's false-reject probability is printed with
+the digits of its probability of conformance (the column beside it, summary.txt and the DCC's
+value: 98.5 %, never "99 %" beside "98.5 %"), and the legend of the items stated by an
+interval names the probability those items state (the triad's 95.45 %), en and zh."""
+from __future__ import annotations
+
+import pytest
+from scipy.stats import chi2
+
+from gonio.report.i18n import labels
+from gonio.report.stated import conformity_texts, interval_legend
+
+
+@pytest.mark.parametrize("lang, word", [("en", "false-reject probability"), ("zh", "误拒绝概率")])
+@pytest.mark.parametrize("p, shown", [(0.98533, "98.5 %"), (0.9511, "95.1 %"),
+                                      (0.99349, "99.3 %")])
+def test_false_reject_probability_has_the_conformance_columns_digits(lang, word, p, shown):
+    c = {"outcome": "fail", "lower": None, "upper": 54.0, "acceptance_upper": 7.0,
+         "rule": "guarded", "conformance_probability": p, "false_reject_probability": p}
+    t = conformity_texts(c, None, labels(lang))
+    assert shown in t["pfr"] and word in t["pfr"], t["pfr"]
+    # summary.txt's text of the same number (gonio.result.text: 3 significant digits)
+    assert f"{100 * p:.3g} %" == shown
+
+
+def _chi2_item(p: float) -> dict:
+    s, nu = 0.2288, 2072
+    upper = s * (nu / chi2.ppf(1 - p, nu)) ** 0.5
+    return {"clause": "§4", "value": s, "nonnegative": True,
+            "uncertainty": {"k": None, "k_source": "chi-square", "coverage_probability": p,
+                            "nu_eff": float(nu), "interval": [0.0, upper]}}
+
+
+@pytest.mark.parametrize("lang, at", [("en", "one-sided {p} % upper limit"),
+                                      ("zh", "单侧 {p} % 上限")])
+def test_the_interval_legend_names_the_items_probability(lang, at):
+    L = labels(lang)
+    assert at.format(p="95.45") in interval_legend({"ARW": _chi2_item(0.9545)}, L)
+    assert at.format(p="95") in interval_legend({"ARW": _chi2_item(0.95)}, L)
+    # items of one kind stating different probabilities: the text as written (no one p)
+    mixed = interval_legend({"a": _chi2_item(0.95), "b": _chi2_item(0.9545)}, L)
+    assert at.format(p="95") in mixed
