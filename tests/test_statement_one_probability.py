@@ -40,3 +40,23 @@ def test_the_interval_legend_names_the_items_probability(lang, at):
     # items of one kind stating different probabilities: the text as written (no one p)
     mixed = interval_legend({"a": _chi2_item(0.95), "b": _chi2_item(0.9545)}, L)
     assert at.format(p="95") in mixed
+
+
+def test_the_optical_summary_states_each_probability_of_conformance(shared_demo):
+    """summary.txt's conformity line of an optical item carries the probability of
+    conformance the certificate's column and the DCC state (as the rate specifications'
+    summary does), never only the "—" of the false-accept probability."""
+    import json
+
+    from gonio.resources import protocols_dir
+
+    out = shared_demo("ogam-draft", seed=1, lab=protocols_dir() / "lab-example.toml")
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    lines = {ln.split(":")[0].split()[-1]: ln for ln in
+             (out / "summary.txt").read_text(encoding="utf-8").splitlines()
+             if ln.startswith("conformity ")}
+    stated = [(k, it["conformity"]["conformance_probability"]) for k, it in res["items"].items()
+              if (it.get("conformity") or {}).get("conformance_probability") is not None]
+    assert stated, "the example laboratory file decides some item with a probability"
+    for key, pc in stated:
+        assert f"probability of conformance {100 * pc:.3g} %" in lines[key], lines[key]

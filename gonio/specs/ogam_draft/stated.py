@@ -617,8 +617,12 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             continue
         t = conformity_texts(c, res, L)
         acc, pfa = declaration_parts(c, t)
+        # the probability of conformance as the rate specifications' summary states it (and
+        # the certificate's column beside the false-reject probability it carries)
+        pc = "" if c.conformance_probability is None else \
+            f", probability of conformance {100 * c.conformance_probability:.3g} %"
         lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
-                     f"rule {c.rule}, {acc}, specific false-accept probability {pfa})"
+                     f"rule {c.rule}, {acc}{pc}, specific false-accept probability {pfa})"
                      + (f"; {t['measured']}" if t["measured"] else ""))
     band = band_note(res, conformity_for(res, lab), L) if lab else ""
     if band:
