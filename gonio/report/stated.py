@@ -272,7 +272,7 @@ def interval_legend(items: dict, L: dict) -> str:
                                           for w, g in groups.items())
 
     def legend(k: str) -> str:    # the kind's text at its items' probability where all
-        ps = p_of.get(k, set())      # state one other than 95 % (the triad's 95.45 %)
+        ps = p_of.get(k, set())      # state one other than 95 % (a 95.45 % convention)
         p = next(iter(ps)) if len(ps) == 1 else None
         if isinstance(p, (int, float)) and abs(p - 0.95) > 1e-9:
             return L[f"k_iv_{k}"].replace("95 %", display("sig4", 100.0 * p) + " %")
