@@ -272,12 +272,11 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
         check_rate_programme(segments, d["table"])
         written = {"date": laboratory_date_text(zone=str(metadata.get("timezone") or "")),
                    "generator": f"gonio {__version__} acquire"}
-        md = with_given_metadata(    # an *_idn given must be the instrument's own answer
-            {**md, **_stated(d["gyro"], {k: v for k, v in metadata.items()
-                                         if not k.endswith("_idn") and k not in written})},
-            {k: v for k, v in metadata.items() if k.endswith("_idn")})
-        md = with_given_metadata({**md, **written},      # a date given must be the run's
-                                 {k: v for k, v in metadata.items() if k in written})
+        # an *_idn, date or generator given must be the instruments' answer or the run's own
+        theirs = {k: v for k, v in metadata.items() if k.endswith("_idn") or k in written}
+        md = with_given_metadata(
+            {**md, **_stated(d["gyro"], {k: v for k, v in metadata.items() if k not in theirs}),
+             **written}, theirs)
         writer = ReadingsFile(path, md, rows, columns=RATE_COLUMNS)
         nominal = md.get("supply_nominal_v")
         eng = RateAcquisition(d, writer, room_temperature_c, prompt,

@@ -23,10 +23,11 @@ from gonio.errors import GonioError
 
 
 #: Metadata keys that state what the instruments reported of themselves or what gonio measured
-#: and wrote (the date it ran, in the laboratory's zone; besides every ``*_idn``, an instrument's own ``*IDN?`` answer): a caller's
-#: metadata (``gonio acquire --meta``, the records' bench form) may add them where the
-#: instruments are silent, never replace them — a certificate names the instrument the
-#: bench answered as, and the virtual bench's identification keeps its readings virtual.
+#: and wrote (the date it ran, in the laboratory's zone; besides every ``*_idn``, an
+#: instrument's own ``*IDN?`` answer): a caller's metadata (``gonio acquire --meta``, the
+#: records' bench form) may add them where the instruments are silent, never replace them —
+#: a certificate names the instrument the bench answered as, and the virtual bench's
+#: identification keeps its readings virtual.
 REPORTED_KEYS = frozenset({"instrument", "model", "serial", "manufacturer", "table",
                            "generator", "temperature_c", "date"})
 

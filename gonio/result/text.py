@@ -68,14 +68,25 @@ def limits_text(lower, upper) -> str:
     return f"[{given_text(lower)}, {given_text(upper)}]"
 
 
+def conformance_clause(c) -> str:
+    """", probability of conformance 98.5 %" (3 significant digits, the certificate's column),
+    or "" where a decision states none: the one text every summary.txt line takes.
+
+    >>> from types import SimpleNamespace
+    >>> conformance_clause(SimpleNamespace(conformance_probability=0.98533))
+    ', probability of conformance 98.5 %'
+    """
+    p = c.conformance_probability
+    return "" if p is None else f", probability of conformance {100 * p:.3g} %"
+
+
 def conformity_text(c) -> str:
     """One conformity decision as a line (limits and guard bands as :func:`limits_text` and
     :func:`band_text` print them)."""
     lims = limits_text(c.lower, c.upper)
     if c.outcome is None:
         return f"{c.item}: limits {lims} ({c.rule}): no decision: {c.reason}"
-    pc = "" if c.conformance_probability is None else \
-        f", probability of conformance {100 * c.conformance_probability:.3g} %"
+    pc = conformance_clause(c)
     if c.conformance_probability is None and (c.probability_model or "").startswith("not given"):
         pc = f", probability {c.probability_model}"
     gb = "" if not c.guard_band else f", guard band {band_text(c.guard_band)}"

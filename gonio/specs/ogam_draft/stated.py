@@ -46,6 +46,7 @@ from gonio.kit.render import (Num, condition_text, conformity_texts, coverage_te
                               parse_display, rule_at_U)
 from gonio.result.statement import (decimals_for_sig, nu_text, p_relation, p_text,
                                     round_half_up)
+from gonio.result.text import conformance_clause
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_PHYSICAL_ZH, BUDGET_SOURCES_ZH,
                                             ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
                                             LABELS, READING_NOTES_ZH, TITLES_EN)
@@ -617,12 +618,9 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             continue
         t = conformity_texts(c, res, L)
         acc, pfa = declaration_parts(c, t)
-        # the probability of conformance as the rate specifications' summary states it (and
-        # the certificate's column beside the false-reject probability it carries)
-        pc = "" if c.conformance_probability is None else \
-            f", probability of conformance {100 * c.conformance_probability:.3g} %"
         lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
-                     f"rule {c.rule}, {acc}{pc}, specific false-accept probability {pfa})"
+                     f"rule {c.rule}, {acc}{conformance_clause(c)}, specific false-accept "
+                     f"probability {pfa})"
                      + (f"; {t['measured']}" if t["measured"] else ""))
     band = band_note(res, conformity_for(res, lab), L) if lab else ""
     if band:
