@@ -60,3 +60,35 @@ def test_the_optical_summary_states_each_probability_of_conformance(shared_demo)
     assert stated, "the example laboratory file decides some item with a probability"
     for key, pc in stated:
         assert f"probability of conformance {100 * pc:.3g} %" in lines[key], lines[key]
+
+
+def test_optical_chi2_items_print_the_nu_their_interval_was_computed_with(shared_demo):
+    """B_s and R are stated by their one-sided χ² interval alone; the legend says "σ's χ²
+    distribution with the ν_eff shown", so the results table (HTML) and summary.txt print
+    that ν beside the interval — the integer part of results.json's ν_eff — and the upper
+    end recomputed from the printed ν (JCGM 100 E.4.3, a closed form) is results.json's."""
+    import json
+    import math
+    import re
+
+    from gonio.resources import protocols_dir
+
+    out = shared_demo("ogam-draft", seed=1, lab=protocols_dir() / "lab-example.toml")
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    html = (out / "certificate.html").read_text(encoding="utf-8")
+    summary = (out / "summary.txt").read_text(encoding="utf-8")
+    chi2_items = [k for k, it in res["items"].items() if it.get("measured")
+                  and (it.get("uncertainty") or {}).get("k_source") == "chi-square"]
+    assert {"zero_stability", "repeatability"} <= set(chi2_items)
+    for key in chi2_items:
+        it = res["items"][key]
+        unc = it["uncertainty"]
+        nu = math.floor(unc["nu_eff"])
+        m = re.search(rf'data-src="items\.{key}\.uncertainty\.nu_eff"[^>]*>([^<]+)<', html)
+        assert m and m.group(1) == str(nu), (key, m and m.group(1))
+        row = next(ln for ln in summary.splitlines() if f"({it['clause']})" in ln
+                   or f"  {it['clause']}  " in ln)
+        assert f"ν_eff = {nu})" in row, row
+        p = unc.get("coverage_probability") or 0.95
+        upper = it["value"] * math.sqrt(nu / chi2.ppf(1 - p, nu))
+        assert upper == pytest.approx(unc["interval"][1], rel=1e-6), key

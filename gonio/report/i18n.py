@@ -178,6 +178,8 @@ LABELS: dict[str, dict[str, str]] = {
     # k = t_p(ν_eff): the ν it was computed from beside it (the one statement rule's ν)
     "U_cell_nu": {"en": "{U} (k = {k}, ν_eff = {nu}, p {r} {p} %)",
                   "zh": "{U}（k = {k}，ν_eff = {nu}，p {r} {p} %）"},
+    # an item stated by its χ² interval: no U, no k; the ν that interval was computed with
+    "U_cell_interval_nu": {"en": "— (ν_eff = {nu})", "zh": "—（ν_eff = {nu}）"},
     # where the coverage factor k comes from
     "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
                           "degrees of freedom (shown per item in the budgets below); {clause}.",

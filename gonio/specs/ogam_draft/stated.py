@@ -218,6 +218,7 @@ def stated_item(res: dict, name: str) -> dict:
             out["p"] = p_text(float(unc["p"]))
         if own is not None and own["statement"].interval is not None:
             out["interval"] = own         # its one statement: no U, no k beside it
+            out["nu"] = own["nu"]         # a χ² interval's ν, the one it was computed with
             out["upper"] = own["statement"].upper_text
             out["below_zero"] = own["statement"].below_zero
             if out["below_zero"]:   # the bound, shown as a number of results.json
@@ -429,8 +430,8 @@ def segments(template: str, **nums) -> list:
 def u_cell(st: dict, L: dict) -> list | str:
     """The "U (k = 2.02, p = 95 %)" cell of one item, as text and Num segments (p with its
     relation sign, :func:`~gonio.result.statement.p_relation`)."""
-    if st["U"] is None:
-        return "—"
+    if st["U"] is None:             # stated by its interval: the ν of a χ² interval alone
+        return "—" if st.get("nu") is None else segments(L["U_cell_interval_nu"], nu=st["nu"])
     if st.get("nu") is not None:
         return segments(L["U_cell_nu"], U=st["U"], k=st["k"] or "—", nu=st["nu"],
                         p=st["p"] or "—", r=p_relation(st["p"]))
@@ -565,8 +566,9 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         if st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
         nu = f"ν_eff = {st['nu']}, " if st.get("nu") is not None else ""
-        U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, {nu}" \
-                                         f"p {p_relation(st['p'])} {st['p'] or '—'} %)"
+        U = (L["U_cell_interval_nu"].format(nu=st["nu"]) if st["U"] is None and st.get("nu")
+             else "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, {nu}"
+                                               f"p {p_relation(st['p'])} {st['p'] or '—'} %)")
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
     fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
