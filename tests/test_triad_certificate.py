@@ -156,6 +156,35 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
     assert "not stated" in text and not re.search(r"not stated\s*°C", text)
 
 
+def test_certified_points_print_each_k_with_the_nu_it_was_computed_from(run):
+    """Every k of the certified-points tables (K's k of the lines beside the table's bound,
+    b's own k) is printed with its ν in brackets, and k = t_p(⌊ν⌋) recomputed with scipy from
+    the printed ν and the stated p is the printed k: a k with no ν, or a ν other than the one
+    k came from, fails."""
+    from scipy import stats
+
+    res, page = run["res"], run["html"]
+    checked = 0
+    for table in re.findall(r'id="points-[Kb]-[xyz]".*?</table>', page, flags=re.S):
+        for k_src, k_txt, nu_src, nu_txt in re.findall(
+                r'data-src="([^"]+\.k(?:_rest)?)" data-rule="k">([^<]*)</span>(?:\s|\u00a0|&nbsp;)\(<span '
+                r'class="num" data-src="([^"]+)" data-rule="nu">([^<]*)</span>\)', table):
+            base = k_src.rsplit(".", 1)[0]
+            assert nu_src == base + (".nu_rest" if k_src.endswith("k_rest") else ".nu_eff")
+            nu = math.floor(lookup(res, nu_src) + 1e-9)
+            assert nu_txt == str(nu), (nu_src, nu_txt)
+            key = k_src.split(".")[1]
+            p = res["items"][key]["uncertainty"]["coverage_probability"]
+            assert k_txt == f"{stats.t.ppf(0.5 + p / 2, int(nu_txt)):.2f}", (k_src, k_txt)
+            checked += 1
+        # no k cell without its ν
+        assert len(re.findall(r'data-rule="k"', table)) == len(re.findall(r'data-rule="nu"',
+                                                                          table))
+    n_points = sum(1 for k in res["items"] if re.fullmatch(r"[Kb]_[xyz]_t\d+_v\d+", k)
+                   and res["items"][k]["measured"])
+    assert checked == n_points > 0
+
+
 def _damaged(src: Path, dst: Path, edit) -> int:
     lines = src.read_text(encoding="utf-8").splitlines(keepends=True)
     out, edited = edit(lines)

@@ -234,14 +234,24 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
     return out
 
 
-def _k_of(res: dict, key: str):
-    """The k of item ``key``'s column: its own coverage factor, or for a bound-condition
-    statement (no k of the whole) the k of the lines beside the table's bound, k_rest
-    (U = a + k_rest·u_rest, ``details.bound_condition``)."""
+def _k_of(res: dict, key: str) -> list | str:
+    """The "k (ν)" cell of item ``key``'s column: its own coverage factor and the ν_eff it was
+    computed from (k = t_p(⌊ν_eff⌋)), or for a bound-condition statement (no k of the whole)
+    the k and ν of the lines beside the table's bound, k_rest = t_p(⌊ν_rest⌋)
+    (U = a + k_rest·u_rest, ``details.bound_condition``); "—" where the item has no k."""
     it = res["items"][key]
+    if not it["measured"]:
+        return "—"
     if it["uncertainty"].get("k") is None and (it.get("details") or {}).get("bound_condition"):
-        return num(res, f"items.{key}.details.bound_condition.k_rest", "k")
-    return num(res, f"items.{key}.uncertainty.k", "k")
+        base = f"items.{key}.details.bound_condition"
+        k, nu = f"{base}.k_rest", f"{base}.nu_rest"
+    else:
+        k, nu = f"items.{key}.uncertainty.k", f"items.{key}.uncertainty.nu_eff"
+    k_cell = num(res, k, "k")
+    if k_cell == "—":
+        return "—"
+    nu_cell = num(res, nu, "nu")
+    return [k_cell] if nu_cell == "—" else [k_cell, "\u00a0(", nu_cell, ")"]
 
 
 def certified_point_blocks(res: dict, ch: str, c: dict, T, lang: str = "en") -> list[Block]:
@@ -267,7 +277,7 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T, lang: str = "en") -> 
             "uncertainty", {}).get("k", 0) is None
         for _, v in levels:
             head += [f"{name} ({display('sig3', v)} V) " + (T("interval_head") if by_interval
-                                                              else "± U"), "k"]
+                                                              else "± U"), "k (ν)"]
         rows = []
         for i, t_set, theta in temps:
             row = [display("sig3", t_set), f"{theta:+.1f}"]
@@ -278,7 +288,7 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T, lang: str = "en") -> 
         out.append(Block("p", [T("points_unit", name=name, unit=unit_text(unit))]))
         share = 0.8 / len(levels)
         out.append(Block("table", (head, rows), {
-            "widths": (0.1, 0.1) + (share * 0.78, share * 0.22) * len(levels),
+            "widths": (0.1, 0.1) + (share * 0.7, share * 0.3) * len(levels),
             "id": f"points-{name}-{ch}"}))
     arw = [(i, t) for i, t, _ in temps if f"ARW_{ch}_t{i}" in items]
     if arw:
