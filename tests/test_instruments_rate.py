@@ -148,6 +148,18 @@ def test_jjf_programme_through_the_instruments_calibrates_like_simulate(bench, p
                  "supply > OUTP OFF", "gyro > ACQ:STAR "):
         assert line in log, line
     assert log.rstrip().splitlines()[-3].endswith("table > STOP")
+    # what was measured, never the protocol's nominal room: no "# room_temperature_c" line,
+    # and each room test's record logs the chamber's air (MEAS:TEMP?) on its first and last
+    # rows, blank between; the chamber tests' rows their set points
+    assert "room_temperature_c" not in r.metadata
+    assert "chamber > MEAS:TEMP?" in log
+    df = r.data
+    room = df[~df["test"].isin(("sf_temperature", "bias_temperature"))]
+    for _, g in room.groupby(["test", "run", "step", "role"], sort=False):
+        t = g["temperature_c"].to_numpy()
+        assert np.isfinite(t[[0, -1]]).all() and (len(t) < 3 or np.isnan(t[1:-1]).all())
+    served_room = 20.0                  # serve_rate_bench's room: the chamber off reads it
+    assert np.nanmedian(room["temperature_c"]) == pytest.approx(served_room, abs=0.5)
 
 
 #: The reader's answers before the served bench's clock stops (``hold:N``) in the SIGINT

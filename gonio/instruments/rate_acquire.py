@@ -18,8 +18,12 @@ on the virtual bench. :func:`acquire_rate` takes it segment by segment:
    in a new cycle), on the reader's own clock, so the host's latency does not move it;
 4. once its time has passed, its samples fetched and written to ``readings.csv`` at once
    (appended, flushed, synced): ``time_s`` since the power-on, the output, the reference
-   rate, the set rate/frequency, the chamber's set point (room when off), the voltage the
-   supply measures.
+   rate, the set rate/frequency, the temperature (below), the voltage the supply measures.
+   ``temperature_c``: a chamber test's rows the chamber's set point (the specification's
+   test temperature); a test run with the chamber off logs what was measured, never the
+   protocol's nominal room — the chamber's air (``MEAS:TEMP?``) read as the record starts
+   and after it ends, on its first and last rows (blank between, as a slow logger's
+   column), and blank on every row where no chamber is connected.
 
 Every wait is timed on the reader's clock (:class:`gonio.instruments.run.ModuleClock`),
 so a bench served N× faster runs N× faster. Every exit path stops the table and switches
@@ -85,19 +89,33 @@ def _cell(v) -> str:
 
 
 def format_rows(seg: Segment, time_s: np.ndarray, output: np.ndarray, reference: np.ndarray,
-                supply_v: float, room_c: float) -> str:
+                supply_v: float, air_c: tuple[float, float] = (math.nan, math.nan)) -> str:
     """A record's rows, as :func:`gonio.formats.rate_readings.write_rate_readings` writes
-    them (12 significant digits, NaN empty)."""
+    them (12 significant digits, NaN empty). ``temperature_c``: the segment's chamber set
+    point; for a segment with the chamber off, ``air_c`` (the air temperature measured as
+    the record started and after it ended) on its first and last rows, blank between (NaN:
+    none measured).
+
+    >>> s = Segment("bias", 1, 0, "record", 3, 1.0)
+    >>> rows = format_rows(s, np.arange(3.0), np.ones(3), np.zeros(3), 5.0, (20.4, 20.6))
+    >>> [r.split(",")[RATE_COLUMNS.index("temperature_c")] for r in rows.splitlines()]
+    ['20.4', '', '20.6']
+    """
     fixed = {"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
              "rate_dps": seg.vib_amplitude_dps if seg.vib_amplitude_dps > 0 else seg.rate_dps,
-             "freq_hz": seg.freq_hz,
-             "temperature_c": room_c if seg.temperature_c is None else seg.temperature_c,
-             "supply_v": supply_v, "up_axis": seg.up_axis, "north_axis": seg.north_axis,
-             "stand_deg": seg.stand_deg, "stand_axis": seg.stand_axis,
-             "supply_set_v": math.nan}
+             "freq_hz": seg.freq_hz, "supply_v": supply_v, "up_axis": seg.up_axis,
+             "north_axis": seg.north_axis, "stand_deg": seg.stand_deg,
+             "stand_axis": seg.stand_axis, "supply_set_v": math.nan}
+    n = len(time_s)
+    if seg.temperature_c is not None:
+        temps = [seg.temperature_c] * n
+    else:
+        temps = [math.nan] * n
+        if n:
+            temps[0], temps[-1] = air_c[0], air_c[1]
     lines = []
-    for t, o, r in zip(time_s.tolist(), output.tolist(), reference.tolist()):
-        row = {**fixed, "time_s": t, "output": o, "reference_dps": r}
+    for t, o, r, c in zip(time_s.tolist(), output.tolist(), reference.tolist(), temps):
+        row = {**fixed, "time_s": t, "output": o, "reference_dps": r, "temperature_c": c}
         lines.append(",".join(_cell(row[c]) for c in RATE_COLUMNS))
     return "\n".join(lines) + "\n"
 
@@ -140,9 +158,9 @@ def resume_point(segments: list[Segment], rows: list[str]) -> tuple[int, list[st
 class RateAcquisition:
     """The engine: the bench's state as set so far, and one segment at a time."""
 
-    def __init__(self, drivers: dict, writer: ReadingsFile, room_c: float, prompt=input,
+    def __init__(self, drivers: dict, writer: ReadingsFile, prompt=input,
                  nominal_v: float | None = None):
-        self.d, self.writer, self.room_c, self.prompt = drivers, writer, room_c, prompt
+        self.d, self.writer, self.prompt = drivers, writer, prompt
         self.nominal_v = nominal_v
         self.clock = ModuleClock(drivers["gyro"])
         self.state: dict = {}
@@ -206,6 +224,7 @@ class RateAcquisition:
             origin, fresh = self.t_end, False
         at = origin + seg.delay_s
         d["gyro"].start_record(seg.samples, seg.interval_s, at)
+        air_first = self._air(seg)
         clock.wait_until(at + seg.samples * seg.interval_s)
         while d["gyro"].ready() < seg.samples:
             clock.wait_until(clock.now() + seg.interval_s)
@@ -215,8 +234,15 @@ class RateAcquisition:
         self.t_end = float(data[-1, 0]) + seg.interval_s
         v = d["supply"].measured_v()
         self.writer.append(format_rows(seg, data[:, 0] - self.t_on, data[:, 1], data[:, 2], v,
-                                       self.room_c))
+                                       (air_first, self._air(seg))))
         self.taken += seg.samples
+
+    def _air(self, seg: Segment) -> float:
+        """The chamber's measured air temperature for a segment run with the chamber off
+        (NaN where no chamber is connected, or the segment has a set point of its own)."""
+        if seg.temperature_c is not None or "chamber" not in self.d:
+            return math.nan
+        return self.d["chamber"].air_c()
 
 
 def _open(resources: dict, drivers: dict, log: IOLog, timeout_s: float, need: set) -> dict:
@@ -233,7 +259,7 @@ def _open(resources: dict, drivers: dict, log: IOLog, timeout_s: float, need: se
 
 
 def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, str | None],
-                 out: str | Path, *, resume: bool = False, room_temperature_c: float = 20.0,
+                 out: str | Path, *, resume: bool = False,
                  drivers: dict | None = None, prompt=input, timeout_s: float = 10.0):
     """Run ``segments`` on the instruments at ``resources`` (``table``, ``gyro``,
     ``chamber``, ``supply``: VISA resource strings); write ``out``/``readings.csv`` (the
@@ -279,7 +305,7 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
              **written}, theirs)
         writer = ReadingsFile(path, md, rows, columns=RATE_COLUMNS)
         nominal = md.get("supply_nominal_v")
-        eng = RateAcquisition(d, writer, room_temperature_c, prompt,
+        eng = RateAcquisition(d, writer, prompt,
                               float(nominal) if nominal not in (None, "") else None)
         total = sum(s.samples for s in segments)
         for i, seg in enumerate(segments[first:], first):

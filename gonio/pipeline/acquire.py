@@ -49,5 +49,5 @@ def acquire(protocol: str | Path, resources: dict[str, str | None], out: str | P
 
     prog = spec.acquisition(str(protocol), dict(metadata or {}))
     return acquire_rate(prog.segments, prog.metadata, resources, out, resume=resume,
-                        room_temperature_c=prog.room_temperature_c, timeout_s=timeout_s,
+                        timeout_s=timeout_s,
                         prompt=prompt)

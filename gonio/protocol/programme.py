@@ -50,13 +50,13 @@ class Segment:
 @dataclass(frozen=True)
 class Programme:
     """What a rate specification's acquisition hook (``Specification.acquisition``) gives
-    ``gonio acquire``: the segments to run in order, the readings' metadata lines (the
-    specification, the protocol's name, what its calibration reads from the metadata), and
-    the room temperature (the ``temperature_c`` of a record with the chamber off)."""
+    ``gonio acquire``: the segments to run in order and the readings' metadata lines (the
+    specification, the protocol's name, what its calibration reads from the metadata). The
+    temperature of a record with the chamber off is measured, not given here
+    (:class:`gonio.instruments.rate_acquire.RateAcquisition`)."""
 
     segments: list
     metadata: dict
-    room_temperature_c: float = 20.0
 
 
 def check_rate_session_size(segments: list[Segment], *, where: str = "the programme") -> int:

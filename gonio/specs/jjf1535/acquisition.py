@@ -32,12 +32,13 @@ def programme(protocol=None, metadata: dict | None = None) -> Programme:
     segs = plan(proto, datasheet_bandwidth_hz=f_hz)
     check_rate_session_size(segs, where="the acquisition programme")
     P = proto.sections
-    room = P["protocol"]["room_temperature_c"]
-    out = {"spec": KEY, "protocol": proto.path.stem if proto.path else KEY,
-           "room_temperature_c": repr(room)}
+    # no "# room_temperature_c" line: the protocol's room temperature is a nominal, not a
+    # measurement (the calibration takes it from the protocol); the room tests' rows log
+    # the temperature the chamber measured, or nothing without one
+    out = {"spec": KEY, "protocol": proto.path.stem if proto.path else KEY}
     for key, value in (("null_output", P["protocol"]["null_output"]),
                        ("latitude_deg", P["bias"]["latitude_deg"])):
         if value != "bench":
             out[key] = repr(float(value))
     out.update(md)
-    return Programme(segs, out, room)
+    return Programme(segs, out)
