@@ -246,6 +246,36 @@ def check_magnitude_extremes(limits, extremes, *, file=None,
             check_symmetric(lim["item"], lim.get("lower"), lim.get("upper"), file=file,
                             key=f"{where}[{i}]")
 
+#: ``[record]`` keys only the records write, for the sealed result they issue and render again
+#: (:func:`gonio.records.compute.render_folder`): a seal, the people the issue required, an
+#: amendment's certificate replaced, its reason and who asked for it.
+ISSUE_RECORD_KEYS: tuple[str, ...] = ("seal_sha256", "min_people", "replaces",
+                                      "amendment_reason", "amendment_asked_by")
+
+
+def check_no_issue_record(lab: dict | None, file=None) -> None:
+    """Refuse a laboratory file whose ``[record]`` states an issue (a seal, the people
+    required, an amendment) for a certificate computed now (``gonio calibrate``, ``gonio
+    demo``): those are written by the records for the result they sealed and issue, and a
+    certificate would print "the laboratory's record of this result is verified against it"
+    beside a seal that no record holds. ``[record] status = "draft"`` (the review copy) stays.
+
+    >>> check_no_issue_record({"record": {"status": "draft", "seal_sha256": ""}})
+    >>> check_no_issue_record({"record": {"status": "issued", "seal_sha256": "ab" * 32}},
+    ...                       "lab.toml")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: lab.toml: key record.seal_sha256: written by the records for a result they sealed and issue, never given to a calibration computed now (it would print a seal no record holds): remove it, or issue through the records
+    """
+    rec = (lab or {}).get("record") or {}
+    for key in ISSUE_RECORD_KEYS:
+        if rec.get(key) not in (None, ""):
+            raise GonioError("written by the records for a result they sealed and issue, "
+                             "never given to a calibration computed now (it would print a "
+                             "seal no record holds): remove it, or issue through the records",
+                             file=None if file is None else str(file), key=f"record.{key}")
+
+
 def load_lab(path: str | Path) -> dict:
     """Read and validate a laboratory details file (see ``protocols/lab-example.toml``).
 

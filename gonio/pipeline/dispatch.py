@@ -224,6 +224,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
                           spec.calibrate_options, "calibrate")
     lab_d = load_lab_file(lab, spec)
+    from gonio.formats.lab import check_no_issue_record
+    check_no_issue_record(lab_d, lab if isinstance(lab, (str, Path)) else lab_file)
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
@@ -280,6 +282,8 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
     spec = get(spec_key)
     renderer = spec.renderer()
     lab_d = load_lab_file(lab, spec)            # validate inputs before simulating
+    from gonio.formats.lab import check_no_issue_record
+    check_no_issue_record(lab_d, lab if isinstance(lab, (str, Path)) else None)
     ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
     own_demo = spec.output_hook("demo")
     if own_demo is not None:
