@@ -183,22 +183,28 @@ def test_session_time_estimate_is_enforced(tmp_path, monkeypatch, capsys):
     assert not out.exists()
 
 
-def test_session_time_estimate_is_calibrated():
-    """The estimate against the CPU time of a real (short) simulation: within a factor 2."""
-    import time
-
+def test_session_estimate_counts_the_samples_the_protocol_plans():
+    """The estimate's size is the planned session's, in closed form: its samples are the
+    session's duration at the bench's rate, and its computing time is the fixed overhead
+    plus samples / SIMULATED_SAMPLES_PER_S. How that constant holds against a machine's CPU
+    time is measured by benchmarks/bench_session_estimate.py (a benchmark prints it; a timed
+    unit test would pass or fail with the machine's speed)."""
     from gonio.specs.ogam_draft.bench import load_bench
-    from gonio.specs.ogam_draft.bench.session import estimate_session, plan_session, run_session
+    from gonio.specs.ogam_draft.bench.session import (SIMULATE_OVERHEAD_S,
+                                                      SIMULATED_SAMPLES_PER_S,
+                                                      estimate_session, plan_session)
     from gonio.specs.ogam_draft.protocol import load_protocol
 
     text = Path(load_protocol("ogam-draft").path).read_text(encoding="utf-8")
     proto = load_protocol("ogam-draft")
-    bench = load_bench("fog")
-    est = estimate_session(plan_session(proto, bench, np.random.default_rng(0)), bench, proto)
-    t0 = time.process_time()
-    run_session(proto, bench, seed=0)
-    cpu = time.process_time() - t0
-    assert est.seconds / 2 <= cpu <= est.seconds * 2, (est.seconds, cpu)
+    for name in ("fog", "rlg"):
+        bench = load_bench(name)
+        blocks = plan_session(proto, bench, np.random.default_rng(0))
+        est = estimate_session(blocks, bench, proto)
+        n = sum(int(b.k_end - b.k_start) for b in blocks)
+        assert est.samples == n > 0
+        assert est.duration_s == pytest.approx(n / bench.sample_rate_hz)
+        assert est.seconds == pytest.approx(SIMULATE_OVERHEAD_S + n / SIMULATED_SAMPLES_PER_S)
     assert "readings = 15" in text
 
 
