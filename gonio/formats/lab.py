@@ -39,6 +39,12 @@ __all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "LOCATIONS", "load
 DECISION_RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
 
 
+#: The widest ``[identity] temperature_tolerance_c`` (°C) and ``humidity_tolerance_pct``
+#: (percentage points): two statements of one room's conditions further apart are a
+#: contradiction, which the laboratory refuses or states (``on_mismatch = "proceed"``),
+#: never hides behind a tolerance as wide as the scale.
+MAX_TEMPERATURE_TOLERANCE_C = 5.0
+MAX_HUMIDITY_TOLERANCE_PCT = 30.0
 #: How a certificate stands in the records (``[record] status``): a draft rendered for
 #: review (watermarked DRAFT on every page), or issued.
 RECORD_STATUSES: tuple[str, ...] = ("draft", "issued")
@@ -92,10 +98,14 @@ LAB_SCHEMA: dict[str, Field] = {
     # (gonio.pipeline.identity): a contradiction is refused unless on_mismatch = "proceed"
     "identity": Field("table", default=None, schema={
         "on_mismatch": Field("str", default="refuse", choices=("refuse", "proceed")),
-        "temperature_tolerance_c": Field("float", default=None, check=non_negative,
-                                         expect="≥ 0"),
-        "humidity_tolerance_pct": Field("float", default=None, check=non_negative,
-                                        expect="≥ 0")}),
+        "temperature_tolerance_c": Field(
+            "float", default=None, check=lambda v: 0 <= v <= MAX_TEMPERATURE_TOLERANCE_C,
+            expect=f"0–{MAX_TEMPERATURE_TOLERANCE_C:g} °C (a wider one switches the check off: "
+                   "state a contradiction with on_mismatch = \"proceed\" instead)"),
+        "humidity_tolerance_pct": Field(
+            "float", default=None, check=lambda v: 0 <= v <= MAX_HUMIDITY_TOLERANCE_PCT,
+            expect=f"0–{MAX_HUMIDITY_TOLERANCE_PCT:g} % (a wider one switches the check off: "
+                   "state a contradiction with on_mismatch = \"proceed\" instead)")}),
     "signatory": Field("table", schema={
         "calibrated_by": _S, "checked_by": _S, "approved_by": Field("str"),
         "approved_title": _S}),
