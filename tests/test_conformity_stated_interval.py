@@ -268,3 +268,26 @@ def test_a_dispersions_one_sided_bound_condition_is_guarded_by_its_reach(r, T_U,
     assert c.outcome == want, c
     assert c.U == pytest.approx(0.025) and c.guard_band == pytest.approx(r * 0.025)
     assert c.false_accept_probability is None
+
+
+@pytest.mark.parametrize("lower, upper, rule, want", [
+    # warm-up 23 s, U 31 s (k 2.18): stated "≤ 54 s (interval [0, 54])"; worked by hand on
+    # that interval (U = 54/2 = 27 for r > 1): [-5, 60] holds [0, 54] → pass; ≤ 50 does not
+    # hold 54 but holds 23 → conditional pass (non-binary); r = 1.1 moves the ends in by 2.7
+    (-5.0, 60.0, "non-binary", "pass"), (None, 50.0, "non-binary", "conditional pass"),
+    (None, 56.0, "guarded", "fail"), (None, 56.8, "guarded", "pass"),
+])
+def test_an_item_stated_by_its_upper_bound_is_decided_on_that_interval(lower, upper, rule, want):
+    """A non-negative item whose U reaches below zero is stated "≤ b (interval [0, b])" and
+    shows no U and no k: it is decided on that interval, as every item stated by an interval
+    is, never on a value ± U with a normal model the certificate does not print (JJF
+    warm-up 23 s: [−5, 60] gave "conditional pass, probability of conformance 88 %" while
+    the stated [0, 54] lies within the limits)."""
+    unc = Uncertainty([], 31.0 / 2.18, 31.0, 2.18, 12.0, None, 0.95, "welch-satterthwaite")
+    res = Result("s", "S", {"W": Item("W", "W", "7.2.9", "s", 23.0, uncertainty=unc,
+                                      nonnegative=True)}, {}, {})
+    lim = {"item": "W", **({"lower": lower} if lower is not None else {}), "upper": upper}
+    guard = {"guard_band_factor": 1.1} if rule == "guarded" else {}
+    (c,) = decide_items(res, [lim], {"rule": rule, **guard})
+    assert c.outcome == want, (lower, upper, rule, c)
+    assert c.conformance_probability is None

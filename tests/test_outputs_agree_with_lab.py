@@ -328,10 +328,10 @@ def test_conformity_is_declared_as_decided(issued):
                 r = c["guard_factor"]
                 assert lo == pytest.approx(r * (c["value"] - it["uncertainty"]["interval"][0]),
                                            rel=1e-9)
-                assert f"guard bands {sig2(lo)} at the lower limit, " \
-                       f"{sig2(c['guard_band'])} at the upper" in line, line
+                assert f"guard bands {exact_band(lo)} at the lower limit, " \
+                       f"{exact_band(c['guard_band'])} at the upper" in line, line
             elif c.get("guard_band"):
-                assert f"guard band {sig2(c['guard_band'])})" in line, line
+                assert f"guard band {exact_band(c['guard_band'])})" in line, line
             # the limits as the laboratory gave them (the lab file's text), never %g-rounded
             want = {"lower": None, "upper": None}
             for k_, v_ in CASES[issued["spec"]][1]:
@@ -348,13 +348,15 @@ def test_conformity_is_declared_as_decided(issued):
             assert f"{key}: limits {lims} (" in line, (line, lims)
 
 
-def sig2(x: float) -> str:
-    """Two significant digits, half up, written as the certificate writes a number (an
-    independent writer: Decimal's own quantize, × 10 powers by hand)."""
+def exact_band(x: float, sig: int = 6) -> str:
+    """A guard band as decided, exactly (w = r·U of printed numbers: a short decimal; 6
+    significant digits, half up, clear the floating point's tail), written as the
+    certificate writes a number (an independent writer: Decimal's own quantize, × 10 powers
+    by hand)."""
     from decimal import ROUND_HALF_UP, Decimal
 
     d = Decimal(repr(float(x)))
-    q = d.quantize(Decimal(1).scaleb(d.adjusted() - 1), rounding=ROUND_HALF_UP)
+    q = d.quantize(Decimal(1).scaleb(d.adjusted() - sig + 1), rounding=ROUND_HALF_UP)
     if q.adjusted() < -4:
         m, e = f"{q:e}".split("e")
         m = m.rstrip("0").rstrip(".")

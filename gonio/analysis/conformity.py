@@ -435,7 +435,10 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
              magnitude: bool) -> Conformity:
     """The decision of a measured item with U (:func:`decide_items`)."""
     unc = it.uncertainty
-    if unc.k is None and unc.interval is not None:
+    if (unc.k is None and unc.interval is not None) or item_statement(it).interval is not None:
+        # stated by an interval (its own, or a non-negative quantity whose U reaches below
+        # zero, stated "≤ b" with the interval [0, b]): decided on that one statement, never
+        # on a value ± U the certificate does not print
         c = _decided_interval(key, it, bounds, rule, magnitude)
     else:
         no_p = None
@@ -714,9 +717,12 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
     # the measured value and interval before rounding (stricter_of): a value stated by its
     # bound alone (below zero) is its interval's lower end, as stated_interval_of takes it
     D = (lambda x: Decimal(repr(float(x))))  # noqa: E731
-    raw_lo, raw_hi = (D(x) for x in unc.interval)
+    # an item with U stated by its bound ("≤ b": U reaches below zero) has [0, value + U]
+    raw = (unc.interval if unc.interval is not None
+           else (0.0, float(it.value) + float(unc.U)))
+    raw_lo, raw_hi = (D(x) for x in raw)
     measured = abs(float(it.value)) if magnitude else float(it.value)   # E: max|E_i|
-    raw_v = raw_lo if v == lo and measured < float(unc.interval[0]) else D(measured)
+    raw_v = raw_lo if v == lo and measured < float(raw[0]) else D(measured)
     raw_outcome = outcome_of(raw_v, raw_lo, raw_hi)
     if chi2:
         nu = chi2_nu(unc.nu_eff)        # as stated: the ν the interval was computed with

@@ -154,7 +154,7 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
     return {"limits": interval_text(g("lower"), g("upper"), given_text),
             "acceptance": acc, "outcome": L[g("outcome")] if g("outcome") else "—",
             "pfa": (display("sig2", 100.0 * pfa) + " %" if pfa is not None
-                    else "≤ " + display("sig2", 100.0 * g("false_accept_bound")) + " %"
+                    else "≤ " + bound_up_text(100.0 * g("false_accept_bound")) + " %"
                     if g("false_accept_bound") is not None else "—"),
             # the probability of conformance's own digits (the column beside it, summary.txt):
             # one number, never 99 % beside 98.5 %
@@ -162,6 +162,22 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
             "no_p": model if g("outcome") and g("conformance_probability") is None
             and model.startswith("not given") else "",
             "measured": measured_clause(c)}
+
+
+def bound_up_text(x: float, sig: int = 2) -> str:
+    """An upper bound at ``sig`` significant digits, rounded up (never below the bound it
+    states): a false-accept bound 1 − 0.980576 = 1.94 % reads "2.0", not "1.9".
+
+    >>> bound_up_text(1.9424), bound_up_text(5.0), bound_up_text(0.6100001)
+    ('2.0', '5.0', '0.62')
+    """
+    from decimal import ROUND_CEILING, Decimal
+
+    from gonio.result.statement import decimals_for_sig
+
+    d = decimals_for_sig(x, sig)
+    q = Decimal(1).scaleb(-d)
+    return str(Decimal(repr(round(x, 12))).quantize(q, rounding=ROUND_CEILING))
 
 
 #: the kinds of interval an item can be stated by, in the legend's order

@@ -45,13 +45,16 @@ def item_text(it) -> str:
 
 
 def band_text(w: float) -> str:
-    """A guard band as summary.txt prints it: two significant digits (half up), in the
-    certificate's number form (never "1.2e-05").
+    """A guard band as summary.txt and the records print it: the w the decision used, exactly
+    (w = r·U of printed numbers, so a short decimal: 6 significant digits clear the binary
+    floating point's tail), in the certificate's number form (never "1.2e-05"), as the
+    certificate's guard-band note derives it: 0.0685 = (0.290 − 0.153)/2, never a rounded
+    "0.069" beside it.
 
-    >>> band_text(1.234e-5), band_text(0.0456), band_text(1234.5), band_text(90.0)
-    ('1.2×10⁻⁵', '0.046', '1200', '90')
+    >>> band_text(1.234e-5), band_text(0.0685), band_text(1.5 * 0.011), band_text(90.0)
+    ('1.234×10⁻⁵', '0.0685', '0.0165', '90')
     """
-    return given_text(float(round_half_up(float(w), decimals_for_sig(float(w), 2))))
+    return given_text(float(round_half_up(float(w), decimals_for_sig(float(w), 6))))
 
 
 def limits_text(lower, upper) -> str:
