@@ -39,6 +39,8 @@ SPEC = Specification(
     calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
     screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
     readings_columns=lazy("gonio.specs.ogam_draft.readings:read_columns"),
+    # the chamber temperature the readings logged, compared with the laboratory's statement
+    measured_conditions=lazy("gonio.specs.ogam_draft.readings:temperature_measured"),
     named_inputs=lazy("gonio.specs.ogam_draft.static_record:named_inputs"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     simulated_files=("readings.csv", "truth.json"),

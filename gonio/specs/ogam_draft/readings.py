@@ -722,3 +722,57 @@ def _csv_line(cells) -> str:
             c = '"' + c.replace('"', '""') + '"'
         parts.append(c)
     return ",".join(parts)
+
+
+def temperature_measured(path) -> dict:
+    r"""The temperature an optical readings file (or a stream, CSV or Parquet) logged in its
+    ``temperature_c`` column: the median of its finite values, as
+    ``{"temperature_c": (text, where)}`` for the identity check (the specification's
+    ``measured_conditions``, :func:`gonio.pipeline.identity.check_identity` ``measured``):
+    the draft's room is the chamber the column logs (Table 2's (20 ± 1) °C), so a laboratory
+    file stating 20.1 °C for readings that logged 35 °C is a contradiction, as the metadata
+    line's would be. ``{}`` where there is no such column or no finite value in it (a blank
+    between a slow logger's rows is no value).
+
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp(); f = os.path.join(d, "r.csv")
+    >>> _ = open(f, "w").write("# serial: A-1\ntest,temperature_c\nscale_factor,20.0\n"
+    ...                        "scale_factor,\nscale_factor,20.4\n")
+    >>> temperature_measured(f)["temperature_c"][0]
+    '20.2'
+    """
+    import statistics
+
+    from gonio.formats.metadata import is_comment, parse_number
+
+    p = Path(path)
+    values: list[float] = []
+    if p.suffix.lower() == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            if "temperature_c" not in pq.read_schema(p).names:
+                return {}
+            col = pq.read_table(p, columns=["temperature_c"]).column(0).to_numpy(
+                zero_copy_only=False)
+        except (OSError, ValueError):
+            return {}
+        values = [float(v) for v in col if v is not None and math.isfinite(float(v))]
+    else:
+        with open(p, encoding="utf-8-sig", newline="") as fh:
+            rows = csv.reader(line for line in fh if line.strip() and not is_comment(line))
+            header = [h.strip() for h in next(rows, [])]
+            if "temperature_c" not in header:
+                return {}
+            ic = header.index("temperature_c")
+            for row in rows:
+                if len(row) <= ic or not row[ic].strip():
+                    continue
+                v = parse_number(row[ic])
+                if v is not None and math.isfinite(v):
+                    values.append(v)
+    if not values:
+        return {}
+    med = statistics.median(values)
+    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of "
+                                             f"{len(values)} rows")}
