@@ -968,6 +968,10 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
         if status in ("reviewed", "issuing"):     # what was reviewed is what is approved
             problems += [f"calibration {cid}: {line}"
                          for line in services.details_changed(store, cid)]
+    with store.session() as s:                    # each row against its own audit trail
+        for cal in s.scalars(select(Calibration).order_by(Calibration.id)):
+            problems += [f"calibration {cal.id}: {line}"
+                         for line in services.trail_problems(s, cal)]
     problems += consistency_problems(store)
     return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems
 

@@ -2254,6 +2254,7 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
+    check_trail(s, cal, action)          # the row's creator and seals are the trail's
     amending = action == "approve" and cal.status == "amending"
     if amending:
         if cal.amend_requested_by_id == actor.id:
@@ -2283,6 +2284,55 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
                          "environment, what its certificate states) and reviewed it may not "
                          "approve it too (one changes, another checks): another person "
                          "reviews or approves", key="role")
+
+
+def trail_problems(s: Session, cal: Calibration) -> list[str]:
+    """What a calibration's row says against its own audit trail (one line each): the
+    creator (``created_by_id``) not the one its creation event (``create`` or ``import``)
+    recorded, and a signed seal (``reviewed_seal``, ``approved_seal``) not the one its latest
+    ``review`` or ``approve`` event recorded. The duties and the issue trust neither column
+    alone: a row rewritten in the database (a creator changed so that they may approve, a
+    seal recomputed over a forged result) is refused on every path and listed by ``gonio db
+    verify`` (the trail is appended to and never rewritten by gonio). A calibration whose
+    trail has no such event (written before the records kept it) has nothing to compare."""
+    def event(actions: tuple[str, ...], first: bool) -> dict | None:
+        order = AuditEvent.id if first else AuditEvent.id.desc()
+        ev = s.scalar(select(AuditEvent).where(
+            AuditEvent.entity == "calibration", AuditEvent.entity_id == str(int(cal.id)),
+            AuditEvent.action.in_(actions)).order_by(order).limit(1))
+        if ev is None:
+            return None
+        try:
+            after = json.loads(ev.after_json or "{}")
+        except ValueError:
+            after = {}
+        return {"user_id": ev.user_id, **(after if isinstance(after, dict) else {})}
+
+    out = []
+    made = event(("create", "import"), first=True)
+    if made is not None:
+        creator = made.get("created_by_id", made["user_id"])
+        if creator is not None and creator != cal.created_by_id:
+            out.append("its recorded creator is not the one its audit trail's creation event "
+                       "names: the row was changed outside gonio")
+    for action, column in (("review", "reviewed_seal"), ("approve", "approved_seal")):
+        signed = getattr(cal, column) or ""
+        ev = event((action,), first=False)
+        if signed and ev is not None and ev.get(column) not in (None, signed):
+            out.append(f"its {column.replace('_', ' ')} is not the one its audit trail's "
+                       f"{action} event recorded: the row was changed outside gonio")
+    return out
+
+
+def check_trail(s: Session, cal: Calibration, action: str) -> None:
+    """Refuse ``action`` on a calibration whose row contradicts its audit trail
+    (:func:`trail_problems`), naming it and what no longer matches."""
+    found = trail_problems(s, cal)
+    if found:
+        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+        raise GonioError(f"calibration {cal.id}: {found[0]}{more}: nothing to {action} "
+                         "(gonio db verify lists it; restore the records from a backup)",
+                         key=f"calibration {cal.id}")
 
 
 def readings_operator(s: Session, cal: Calibration) -> str:
@@ -2412,6 +2462,10 @@ def seal(store, cal_id: int) -> str:
         if not blobs.verify(store.blob_root, sha):
             raise GonioError(f"the stored {name} is missing or does not match its SHA-256",
                              key=f"calibration {cal_id}")
+    if cal.readings_sha256 and not blobs.verify(store.blob_root, cal.readings_sha256):
+        # the raw data the result was computed from, as stored: damaged on disk → no seal
+        raise GonioError("the stored readings are missing or do not match their SHA-256",
+                         key=f"calibration {cal_id}")
     doc = json.loads(file_bytes(store, cal.results_sha256))
     _same_readings(doc, cal.readings_sha256, cal_id)
     _same_table_calibration(doc, files.get(TABLE_CALIBRATION), cal_id)
@@ -2972,6 +3026,7 @@ def sealed_result(store, cal_id: int) -> bytes:
     cal = calibration(store, cal_id)
     _approved(signed, cal.approved_seal, "issued")
     with store.session() as s:
+        check_trail(s, s.get(Calibration, cal_id), "issue")
         _not_withdrawn(s, cal, "issue")
     return file_bytes(store, cal.results_sha256)
 
@@ -2994,6 +3049,7 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
                              "nothing issued twice", key="issue")
         before = state(cal)
         _approved(signed, cal.approved_seal, "issued")
+        check_trail(s, cal, "issue")
         _not_withdrawn(s, cal, "issue")
         for sha, size in files.values():
             if s.get(Blob, sha) is None:

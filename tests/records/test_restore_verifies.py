@@ -69,7 +69,9 @@ def creator_approves(t):
     (scaled_value, "differs from the stored results.json"),
     (no_certificates, "issued, and no certificate of it is recorded"),
     (counter_back, "beyond the 20"),
-    (creator_approves, "approved by the person who created its calibration")])
+    # the creator column rewritten: first against its own audit trail (the trail names the
+    # calibration's real creator), then the approver check behind it
+    (creator_approves, "its recorded creator is not the one its audit trail")])
 def test_a_tampered_archive_is_not_restored(issued_archive, tmp_path, change, said):
     _, good = issued_archive
     bad = tmp_path / "bad.zip"
