@@ -92,3 +92,26 @@ def test_optical_chi2_items_print_the_nu_their_interval_was_computed_with(shared
         p = unc.get("coverage_probability") or 0.95
         upper = it["value"] * math.sqrt(nu / chi2.ppf(1 - p, nu))
         assert upper == pytest.approx(unc["interval"][1], rel=1e-6), key
+
+
+@pytest.mark.parametrize("p, shown, q, h", [(0.9545, "95.45", "4.6", "2.3"),
+                                            (0.95, "95", "5.0", "2.5")])
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_the_guard_band_note_and_the_probability_model_name_the_items_p(p, shown, q, h, lang):
+    """An item stated at p = 95.45 % (the triad) is decided "on its 95.45 % interval", and the
+    guard-band note under the decision rule says 95.45 % and 1 − p = 4.6 % (rounded up, as
+    the column's bound), never a fixed "95 %" and "5 %" beside a 95.45 % statement."""
+    from gonio.analysis.conformity import decide_items
+    from gonio.report.stated import interval_band_note
+    from gonio.result.model import Item, Result, Uncertainty
+
+    unc = Uncertainty([], 0.003, 0.0065, None, None, None, p, "U = a + k·u",
+                      (0.8740, 0.8870))
+    res = Result("s", "S", {"M": Item("M", "M", "c", "1", 0.8805, uncertainty=unc)}, {}, {})
+    (c,) = decide_items(res, [{"item": "M", "lower": 0.8, "upper": 0.9}],
+                        {"rule": "non-binary", "guard_band_factor": 1.0})
+    assert f"its {shown} % interval" in c.probability_model and "95 %" not in \
+        c.probability_model.replace(f"{shown} %", ""), c.probability_model
+    note = interval_band_note([("M", c.to_json())], labels(lang), lambda k: k, lambda k: "",
+                              lambda k: p)
+    assert f"{shown} %" in note and f"1 − p = {q} %" in note and f"{h} %" in note, note

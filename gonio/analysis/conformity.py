@@ -56,7 +56,8 @@ from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interva
                               check_one_limit_per_item, check_symmetric)
 from gonio.result.model import Conformity
 from gonio.result.statement import (K_SOURCE_BOUND_CHI2, decimals_for_sig, given_text,
-                                    is_magnitude_statement, item_statement, stated_nu, chi2_nu)
+                                    is_magnitude_statement, item_statement, p_text, stated_nu,
+                                    chi2_nu)
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -202,7 +203,7 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
 #: several points), so no probability of conformance is given; the outcome is decided on the
 #: interval (its upper end against the limit).
 MAX_ABS_PROBABILITY_MODEL = ("not given: the extreme of several points; the outcome is "
-                             "decided on its 95 % interval")
+                             "decided on its {p} % interval")
 
 
 def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
@@ -342,9 +343,9 @@ def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
 #: magnitudes): N(y, u_c²) is not its distribution (the belt's y is bias-corrected and may lie
 #: below zero while its interval starts at 0), so a normal probability would contradict the
 #: interval stated beside it; none is given, the outcome is decided on the interval.
-NOT_NORMAL_PROBABILITY_MODEL = ("not given: its 95 % interval ({source}) is not that of a "
+NOT_NORMAL_PROBABILITY_MODEL = ("not given: its {p} % interval ({source}) is not that of a "
                                 "normal or chi-square distribution; the outcome is decided on "
-                                "its 95 % interval")
+                                "its {p} % interval")
 
 
 def extreme_of_magnitudes(key: str, it, declared=()) -> bool:
@@ -730,8 +731,14 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
         model = f"chi-square, nu = {nu:g}"
     else:
         p_c = None
-        model = (MAX_ABS_PROBABILITY_MODEL if magnitude else
-                 NOT_NORMAL_PROBABILITY_MODEL.format(source=unc.k_source or "its own"))
+        # the interval's own p (the item's statement: 95.45 % for the triad, p ≈ 98 % for a
+        # grid-step interval), never a fixed "95 %"
+        pt = p_text(float(unc.coverage_probability or 0.95))
+        model = (MAX_ABS_PROBABILITY_MODEL.format(p=pt) if magnitude else
+                 NOT_NORMAL_PROBABILITY_MODEL.format(
+                     p=pt, source=("[0, value + U]: a non-negative quantity whose U reaches "
+                                   "below zero" if unc.interval is None
+                                   else unc.k_source or "its own")))
     accepted = outcome in ("pass", "conditional pass")
     p = float(unc.coverage_probability or 0.95)
     bound = (round(1.0 - p, 12) if outcome == "pass" and rule.kind != "simple"

@@ -66,7 +66,7 @@ from gonio.report.render import (Block, font_families, render_html, render_pdf,
                                  render_pdf_figures)
 from gonio.report.stated import (NoBreakText, Num, conformity_texts, declaration_parts,
                                  interval_legend, item_nums, lookup, interval_band_note,
-                                 measured_note, no_probability_note, num)
+                                 measured_note, no_probability_note, num, stated_p)
 from gonio.report.text import clean_tree
 
 __all__ = [
@@ -75,7 +75,8 @@ __all__ = [
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
-    "no_probability_note", "measured_note", "interval_band_note", "declaration_parts",
+    "no_probability_note", "measured_note", "interval_band_note", "stated_p",
+    "declaration_parts",
     "interval_legend", "interval_quantity", "below_zero_quantity",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",

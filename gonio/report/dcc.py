@@ -54,7 +54,8 @@ from lxml import etree
 from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, finding_text, labels
-from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
+from gonio.report.stated import (Num, conformity_texts, declaration_parts, interval_band_note,
+                                 stated_p as item_p)
 from gonio.result.statement import (DSI_UNITS, K_SOURCE_BOUND_CHI2, K_SOURCE_MAX_MAGNITUDE,
                                     p_text)
 
@@ -285,7 +286,8 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
         text_element(st, "dcc:declaration", L.get(f"rule_{rule}", rule).format(
             r=display("k", r.get("guard_factor") or 0.0)))
     # the U of w = r·U of each item decided on its 95 % interval alone, as on the certificate
-    band = interval_band_note(decided, L, name_of, lambda k: band_unit(items[k]))
+    band = interval_band_note(decided, L, name_of, lambda k: band_unit(items[k]),
+                              lambda k: item_p(items[k]))
     if band:
         st = element(sts, "dcc:statement", id="guard-band-interval-items")
         text_element(st, "dcc:name", "Guard band of the items stated by an interval")

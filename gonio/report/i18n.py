@@ -352,7 +352,7 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "按修约前的测得值判定（{items}）：该值超出接受限，而修约到所给位数的"
                               "打印值未超出；给出较严格的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
     "c_interval_band_note": {
-        "en": "Guard band of an item stated by its 95 % interval alone ({items}): U in w = r·U "
+        "en": "Guard band of an item stated by its {p} % interval alone ({items}): U in w = r·U "
               "is the half-width of that interval as stated, (upper end − lower end)/2 "
               "(the interval is its centre ± U; not an uncertainty stated beside it), and w "
               "is applied to the interval's ends: each end is moved in by (r − 1)·U, so at "
@@ -361,16 +361,16 @@ LABELS: dict[str, dict[str, str]] = {
               "value (σ's χ² distribution about the estimate, whose probability of "
               "conformance is given). Such an item is decided on the "
               "interval as printed; an accepted one lies above its interval's upper end with "
-              "a probability of at most 1 − p = 5 % (the column “≤ 5 %”; a one-sided 95 % "
-              "bound reaches that, an item stated y ± U with k for 95 % has at most 2.5 % at "
+              "a probability of at most 1 − p = {q} % (the column “≤ {q} %”; a one-sided {p} % "
+              "bound reaches that, an item stated y ± U with k for {p} % has at most {h} % at "
               "r = 1).",
-        "zh": "以 95 % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为所给区间的半宽，"
+        "zh": "以 {p} % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为所给区间的半宽，"
               "（上端 − 下端）/2（区间即 中点 ± U；不是其旁给出的不确定度）；w 施加于区间的端点："
               "两端各向内移 (r − 1)·U，r = 1 时区间位于规定限之内；以单侧 χ² 上限表述的标准差，"
               "U 为上限高出估计值的量，上端 − 值（σ 关于估计值的 χ² 分布，并给出其符合概率）。"
               "此类项目按所印区间判定；"
-              "判为合格者其被测量高于区间上端的概率至多为 1 − p = 5 %（表中“≤ 5 %”；单侧 95 % "
-              "上限可达此值，以 y ± U（95 % 的 k）表述的项目在 r = 1 时至多 2.5 %）。"},
+              "判为合格者其被测量高于区间上端的概率至多为 1 − p = {q} %（表中“≤ {q} %”；单侧 {p} % "
+              "上限可达此值，以 y ± U（{p} % 的 k）表述的项目在 r = 1 时至多 {h} %）。"},
     "c_interval_band_item": {"en": "{name}: U = ({hi} − {lo})/2 {unit} = {U} {unit}, w = {w} "
                                    "{unit}",
                              "zh": "{name}：U = ({hi} − {lo})/2 {unit} = {U} {unit}，w = {w} "
@@ -822,11 +822,11 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      r"[^;]+)?; limits from: (.*)",
      "{1}{2}；规定限 {3}；接受条件：{4}；特定误接受概率 {5}{6}；规定限来源：{7}"),
     # no probability, with its reason (gonio.analysis.conformity's probability models)
-    (r"— \(not given: the extreme of several points; the outcome is decided on its 95 % "
-     r"interval\)", "—（不给出：多个点的极值；判定依据其 95 % 区间作出）"),
-    (r"— \(not given: its 95 % interval \((.+)\) is not that of a normal or chi-square "
-     r"distribution; the outcome is decided on its 95 % interval\)",
-     "—（不给出：其 95 % 区间（{1}）不是正态分布或 χ² 分布的区间；判定依据其 95 % 区间作出）"),
+    (r"— \(not given: the extreme of several points; the outcome is decided on its ([\d.]+) % "
+     r"interval\)", "—（不给出：多个点的极值；判定依据其 {1} % 区间作出）"),
+    (r"— \(not given: its ([\d.]+) % interval \((.+)\) is not that of a normal or chi-square "
+     r"distribution; the outcome is decided on its ([\d.]+) % interval\)",
+     "—（不给出：其 {1} % 区间（{2}）不是正态分布或 χ² 分布的区间；判定依据其 {3} % 区间作出）"),
     (r"— \(not given: its k = (\S+) is the 95 % coverage factor of a non-normal combined "
      r"distribution \((.+)\), not of N\(y, U/k\); the outcome is decided on y ± U\)",
      "—（不给出：其 k = {1} 为非正态合成分布（{2}）的 95 % 包含因子，不是 N(y, U/k) 的；"
@@ -839,11 +839,11 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     # the bound an accepted interval item states where no probability is computed, with
     # the reason (report.stated.declaration_parts)
     (r"(≤ \S+ %) \((not given: .+)\)", "{1}（{2}）"),
-    (r"not given: the extreme of several points; the outcome is decided on its 95 % interval",
-     "不给出：多个点的极值；判定依据其 95 % 区间作出"),
-    (r"not given: its 95 % interval \((.+)\) is not that of a normal or chi-square "
-     r"distribution; the outcome is decided on its 95 % interval",
-     "不给出：其 95 % 区间（{1}）不是正态分布或 χ² 分布的区间；判定依据其 95 % 区间作出"),
+    (r"not given: the extreme of several points; the outcome is decided on its ([\d.]+) % "
+     r"interval", "不给出：多个点的极值；判定依据其 {1} % 区间作出"),
+    (r"not given: its ([\d.]+) % interval \((.+)\) is not that of a normal or chi-square "
+     r"distribution; the outcome is decided on its ([\d.]+) % interval",
+     "不给出：其 {1} % 区间（{2}）不是正态分布或 χ² 分布的区间；判定依据其 {3} % 区间作出"),
     (r"Guard band of the items stated by an interval", "以区间表述的项目的保护带"),
     (r"; rule (\S+)", "；判定规则 {1}"),
     (r"; (.+)", "；{1}"),

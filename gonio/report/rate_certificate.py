@@ -414,7 +414,7 @@ def dcc_translator(result, content_fn):
                 extra[st.text("en")] = st.text("zh")
     # the guard-band note of the items decided on their interval (conformity_statements)
     from gonio.report.dcc import band_unit
-    from gonio.report.stated import interval_band_note
+    from gonio.report.stated import interval_band_note, stated_p
 
     decided = [(k, it["conformity"]) for k, it in res.get("items", {}).items()
                if it.get("conformity")]
@@ -425,7 +425,8 @@ def dcc_translator(result, content_fn):
         return titles.get(k) or reason_text(res["items"][k]["title"], labels("zh"), phrases_zh)
     band = {lg: interval_band_note(decided, labels(lg), lambda k: (
         title_zh(k) if lg == "zh" else res["items"][k]["title"]),
-        lambda k: band_unit(res["items"][k])) for lg in ("en", "zh")}
+        lambda k: band_unit(res["items"][k]), lambda k: stated_p(res["items"][k]))
+        for lg in ("en", "zh")}
     if band["en"]:
         extra[band["en"]] = band["zh"]
     # each screening finding the DCC states (gonio.report.dcc.finding_statements): the

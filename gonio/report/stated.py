@@ -366,7 +366,23 @@ def c_outcome(c):
     return c.get("outcome") if isinstance(c, dict) else getattr(c, "outcome", None)
 
 
-def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
+def stated_p(item) -> float | None:
+    """The coverage probability a results.json item (a dict, or an Item) states, None where it
+    states none.
+
+    >>> stated_p({"uncertainty": {"coverage_probability": 0.9545}}), stated_p({})
+    (0.9545, None)
+    """
+    unc = item.get("uncertainty") if isinstance(item, dict) else getattr(item, "uncertainty",
+                                                                          None)
+    if unc is None:
+        return None
+    p = unc.get("coverage_probability") if isinstance(unc, dict) else getattr(
+        unc, "coverage_probability", None)
+    return None if p is None else float(p)
+
+
+def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
     """The note under a decision rule with a guard band naming, for each item decided on its
     95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the U of
     its guard band w = r·U: the half-width of the interval as stated,
@@ -376,12 +392,17 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
     exactly from the stated ends the Result stores (``stated_interval``, ``U``), so that no
     reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
     it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
-    the unit as printed."""
-    rows = []
+    the unit as printed; ``p_of(key)``: the coverage probability item ``key`` states (the
+    note names it, 1 − p and (1 − p)/2, where the items it lists state one p: the triad's
+    95.45 %; else, or without ``p_of``, 95 %)."""
+    from gonio.result.statement import p_text
+
+    rows, ps = [], set()
     for key, c in decided:
         if not c or c.get("acceptance_of") != "interval" or c.get("rule") == "simple" \
                 or not c.get("outcome") or c.get("U") is None or not c.get("stated_interval"):
             continue
+        ps.add(None if p_of is None else p_of(key))
         lo, hi = c["stated_interval"]
         r = c.get("guard_factor") or 1.0
         if str(c.get("probability_model") or "").startswith("chi-square") \
@@ -398,7 +419,11 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
     if not rows or "c_interval_band_note" not in L:
         return ""
     sep = "；" if L["c_interval_band_note"].startswith("以") else "; "
-    return L["c_interval_band_note"].format(items=sep.join(rows))
+    p = ps.pop() if len(ps) == 1 else None
+    p = float(p) if p else 0.95
+    return L["c_interval_band_note"].format(items=sep.join(rows), p=p_text(p),
+                                            q=bound_up_text(100.0 * (1.0 - p)),
+                                            h=bound_up_text(50.0 * (1.0 - p)))
 
 
 def _half_text(lo: str, hi: str, r: float = 1.0, parts: int = 2) -> str:
@@ -439,7 +464,7 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
         r = next(c for _, c in decided if (c.get("rule") or "simple") == rule)
         out.append(block("p", [L.get(f"rule_{rule}", rule).format(
             r=display("k", r.get("guard_factor") or 0.0))], None))
-    band = interval_band_note(decided, L, name_of, unit_of)
+    band = interval_band_note(decided, L, name_of, unit_of, lambda k: stated_p(items[k]))
     if band:
         out.append(block("p", [band], None))
     rows = []

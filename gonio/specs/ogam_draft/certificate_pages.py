@@ -34,7 +34,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
-                              interval_band_note, interval_legend,
+                              interval_band_note, interval_legend, stated_p,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
                               label_translator, labels, measured_note, meta_text, no_probability_note, num,
@@ -350,7 +350,8 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
         add("p", [L[f"rule_{rule.kind}"].format(r=display("k", rule.guard_factor))])
         stored = [(e["item"], res["items"][e["item"]]["conformity"]) for e in conf]
         band = interval_band_note(stored, L, lambda k: L[k], lambda k: L.get(
-            "u_" + res["items"][k]["unit"], res["items"][k]["unit"]))
+            "u_" + res["items"][k]["unit"], res["items"][k]["unit"]),
+            lambda k: stated_p(res["items"][k]))
         if band:
             add("p", [band])
         for b in decision_rule_blocks(lab, stored, L, lambda k: L[k]):

@@ -43,7 +43,7 @@ import math
 from gonio.kit.render import (Num, condition_text, conformity_texts, coverage_text,
                               declaration_parts, display,
                               display_number, interval_band_note, item_nums, labels, num,
-                              parse_display, rule_at_U)
+                              parse_display, rule_at_U, stated_p)
 from gonio.result.statement import (decimals_for_sig, nu_text, p_relation, p_text,
                                     round_half_up)
 from gonio.result.text import conformance_clause
@@ -444,7 +444,8 @@ def band_note(res: dict, conf: list, L: dict) -> str:
     decisions ``conf`` (:func:`conformity_for`) in the labels ``L``' language, "" if none."""
     stored = [(e["item"], res["items"][e["item"]]["conformity"]) for e in conf]
     return interval_band_note(stored, L, lambda k: L[k], lambda k: L.get(
-        "u_" + res["items"][k]["unit"], res["items"][k]["unit"]))
+        "u_" + res["items"][k]["unit"], res["items"][k]["unit"]),
+        lambda k: stated_p(res["items"][k]))
 
 
 def conformity_for(res: dict, lab: dict | None) -> list[dict]:
