@@ -28,6 +28,48 @@ KNOWN_METADATA: tuple[str, ...] = (
 #: knows them, so a misspelt or wrongly cased one is refused, never kept aside uncompared.
 IDENTITY_METADATA: tuple[str, ...] = ("serial", "model", "manufacturer", "gyro_type",
                                       "temperature_c", "room_temperature_c", "humidity_pct")
+#: Other names a laboratory's logger writes for an identity or condition key (compared case
+#: and separators folded: ``Serial-Number``, ``S/N``): a readings file using one is refused,
+#: naming the key gonio compares, never kept aside uncompared beside it
+#: (:func:`check_identity_synonyms`).
+IDENTITY_SYNONYMS: dict[str, str] = {
+    **{k: "serial" for k in ("serial_number", "serialnumber", "serial_no", "sn", "s_n",
+                             "instrument_serial", "device_serial", "gyro_serial")},
+    **{k: "model" for k in ("model_number", "model_no", "modelnumber", "instrument_model",
+                            "type_designation")},
+    **{k: "manufacturer" for k in ("maker", "make", "vendor", "mfr", "brand")},
+    **{k: "temperature_c" for k in ("temperature", "temp", "temp_c", "ambient_temperature",
+                                    "ambient_temperature_c", "room_temp", "room_temp_c",
+                                    "lab_temperature_c", "t_c")},
+    **{k: "humidity_pct" for k in ("humidity", "rh", "rh_pct", "relative_humidity",
+                                   "relative_humidity_pct", "humidity_percent")},
+}
+
+
+def check_identity_synonyms(keys, file=None) -> None:
+    """Refuse a metadata key that is another name for an identity or condition key
+    (:data:`IDENTITY_SYNONYMS`, case, spaces, ``-`` and ``/`` folded to ``_``): a
+    ``# serial_number: RLG-0999`` beside the laboratory file's RLG-0001 would otherwise be
+    kept in results.json and compared with nothing.
+
+    >>> check_identity_synonyms(["serial", "operator"])
+    >>> check_identity_synonyms(["Serial-Number"], "r.csv")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: r.csv: key Serial-Number: another name for 'serial', which gonio compares with the laboratory file and the records: write it as '# serial: …' (a second name is never kept aside uncompared)
+    """
+    import re
+
+    for key in keys:
+        folded = re.sub(r"[\s/\-]+", "_", str(key).strip().casefold())
+        want = IDENTITY_SYNONYMS.get(folded)
+        if want is not None and key != want:
+            raise GonioError(f"another name for {want!r}, which gonio compares with the "
+                             f"laboratory file and the records: write it as '# {want}: …' "
+                             "(a second name is never kept aside uncompared)",
+                             file=None if file is None else str(file), key=str(key))
+
+
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability
 # (1e-50 .. 1e50 where a number divides or scales data), not from the instruments one has in

@@ -48,7 +48,8 @@ import pandas as pd
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
-from gonio.formats.metadata import IDENTITY_METADATA, comment_body, is_comment, parse_number
+from gonio.formats.metadata import (IDENTITY_METADATA, check_identity_synonyms, comment_body,
+                                    is_comment, parse_number)
 
 COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                             "temperature_c", "supply_v", "up_axis", "north_axis",
@@ -199,6 +200,7 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     header_line = i + 1
     header = [h.strip() for h in lines[i].split(",")]
     check_header(header, REQUIRED, file=fname, line=header_line)   # another format: named
+    check_identity_synonyms(md, fname)
     check_near_miss(md, (*NUMERIC_METADATA, *IDENTITY_METADATA), what="metadata key",
                     file=fname)
     check_near_miss(header, COLUMNS, what="column", file=fname, line=header_line)

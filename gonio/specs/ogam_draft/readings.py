@@ -46,8 +46,8 @@ from gonio.errors import (GonioError, MissingColumnError, check_header, check_ne
                           read_utf8)
 from gonio.formats.metadata import (IDENTITY_METADATA, KNOWN_METADATA,  # noqa: F401
                                     NUMERIC_METADATA, metadata_bool,
-                                    comment_body, is_comment, metadata_float, metadata_gyro_type,
-                                    parse_number)
+                                    check_identity_synonyms, comment_body, is_comment,
+                                    metadata_float, metadata_gyro_type, parse_number)
 from gonio.formats.metadata import show_value as _show
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
@@ -209,6 +209,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     for key in metadata:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
+    check_identity_synonyms(metadata, fname)
     check_near_miss(metadata, (*KNOWN_METADATA, *IDENTITY_METADATA), what="metadata key",
                     file=fname)
     metadata_gyro_type(metadata, file=fname)

@@ -37,8 +37,8 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
-from gonio.formats.metadata import (IDENTITY_METADATA, metadata_block, named_files,
-                                    parse_number)
+from gonio.formats.metadata import (IDENTITY_METADATA, check_identity_synonyms,
+                                    metadata_block, named_files, parse_number)
 
 FORMAT = "gonio-triad-readings/1"
 TESTS = ("alignment", "static", "thermal")
@@ -176,6 +176,7 @@ def _parse_triad_readings(text: str, file: str) -> TriadReadings:
             raise GonioError(f"missing metadata '# {k}: ...'", file=file, key=k)
     if meta["format"] != FORMAT:
         raise GonioError(f"format must be {FORMAT!r}, got {meta['format']!r}", file=file, key="format")
+    check_identity_synonyms(meta, file)
     check_near_miss(meta, (*REQUIRED_METADATA, *NUMERIC_METADATA, *TABLE_METADATA,
                            *ENVIRONMENT_METADATA, *IDENTITY_METADATA),
                     what="metadata key", file=file)
