@@ -731,7 +731,7 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
         model = f"chi-square, nu = {nu:g}"
     else:
         p_c = None
-        # the interval's own p (the item's statement: 95.45 % for the triad, p ≈ 98 % for a
+        # the interval's own p (the item's statement: 95.45 % at a p chosen so, p ≈ 98 % for a
         # grid-step interval), never a fixed "95 %"
         pt = p_text(float(unc.coverage_probability or 0.95))
         model = (MAX_ABS_PROBABILITY_MODEL.format(p=pt) if magnitude else

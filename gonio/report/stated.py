@@ -393,7 +393,7 @@ def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
     reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
     it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
     the unit as printed; ``p_of(key)``: the coverage probability item ``key`` states (the
-    note names it, 1 − p and (1 − p)/2, where the items it lists state one p: the triad's
+    note names it, 1 − p and (1 − p)/2, where the items it lists state one p: one chosen
     95.45 %; else, or without ``p_of``, 95 %)."""
     from gonio.result.statement import p_text
 
