@@ -308,3 +308,36 @@ def parse_number(text: str) -> float | None:
         return None
     return float(text)
 
+
+
+def logged_median(path, column: str = "temperature_c", skip=None) -> tuple[float, int] | None:
+    r"""The median of the finite values a CSV table (``#`` comment lines above or among its
+    rows) logged in ``column``, and how many rows gave one: (median, n); None where the table
+    has no such column or no finite value in it (a blank between a slow logger's rows is no
+    value). ``skip(header, row)``: rows left out (a rate file's chamber tests). Read row by
+    row, for the identity check's ``measured_conditions``.
+
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp(); f = os.path.join(d, "r.csv")
+    >>> _ = open(f, "w").write("# serial: A-1\ntest,temperature_c\nb,20.0\nb,\nb,20.4\n")
+    >>> logged_median(f)
+    (20.2, 2)
+    """
+    import csv
+    import math
+    import statistics
+
+    values = []
+    with open(path, encoding="utf-8-sig", newline="") as fh:
+        rows = csv.reader(line for line in fh if line.strip() and not is_comment(line))
+        header = [h.strip() for h in next(rows, [])]
+        if column not in header:
+            return None
+        ic = header.index(column)
+        for row in rows:
+            if len(row) <= ic or not row[ic].strip() or (skip is not None and skip(header, row)):
+                continue
+            v = parse_number(row[ic])
+            if v is not None and math.isfinite(v):
+                values.append(v)
+    return (statistics.median(values), len(values)) if values else None

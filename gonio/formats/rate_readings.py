@@ -49,7 +49,7 @@ import pandas as pd
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
 from gonio.formats.metadata import (IDENTITY_METADATA, check_identity_synonyms, comment_body,
-                                    is_comment, parse_number)
+                                    is_comment, logged_median, parse_number)
 
 COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                             "temperature_c", "supply_v", "up_axis", "north_axis",
@@ -433,25 +433,14 @@ def room_temperature_measured(path) -> dict:
     >>> room_temperature_measured(f)["temperature_c"][0]
     '20.2'
     """
-    import csv as _csv
-    import statistics
+    def chamber_row(header: list[str], row: list[str]) -> bool:
+        it = header.index("test") if "test" in header else None
+        return it is None or len(row) <= it or row[it].strip() in CHAMBER_TESTS
 
-    values = []
-    with open(path, encoding="utf-8-sig", newline="") as fh:
-        rows = _csv.reader(line for line in fh if line.strip() and not is_comment(line))
-        header = [h.strip() for h in next(rows, [])]
-        if "temperature_c" not in header or "test" not in header:
-            return {}
-        it, ic = header.index("test"), header.index("temperature_c")
-        for row in rows:
-            if len(row) <= max(it, ic) or row[it].strip() in CHAMBER_TESTS:
-                continue
-            v = parse_number(row[ic]) if row[ic].strip() else None
-            if v is not None and math.isfinite(v):
-                values.append(v)
-    if not values:
+    found = logged_median(path, "temperature_c", chamber_row)
+    if found is None:
         return {}
-    med = statistics.median(values)
-    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of {len(values)} "
+    med, n = found
+    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of {n} "
                               "rows of the tests run in the room")}
 

@@ -744,10 +744,9 @@ def temperature_measured(path) -> dict:
     """
     import statistics
 
-    from gonio.formats.metadata import is_comment, parse_number
+    from gonio.formats.metadata import logged_median
 
     p = Path(path)
-    values: list[float] = []
     if p.suffix.lower() == ".parquet":
         import pyarrow.parquet as pq
 
@@ -759,21 +758,10 @@ def temperature_measured(path) -> dict:
         except (OSError, ValueError):
             return {}
         values = [float(v) for v in col if v is not None and math.isfinite(float(v))]
+        found = (statistics.median(values), len(values)) if values else None
     else:
-        with open(p, encoding="utf-8-sig", newline="") as fh:
-            rows = csv.reader(line for line in fh if line.strip() and not is_comment(line))
-            header = [h.strip() for h in next(rows, [])]
-            if "temperature_c" not in header:
-                return {}
-            ic = header.index("temperature_c")
-            for row in rows:
-                if len(row) <= ic or not row[ic].strip():
-                    continue
-                v = parse_number(row[ic])
-                if v is not None and math.isfinite(v):
-                    values.append(v)
-    if not values:
+        found = logged_median(p)
+    if found is None:
         return {}
-    med = statistics.median(values)
-    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of "
-                                             f"{len(values)} rows")}
+    med, n = found
+    return {"temperature_c": (f"{med:.6g}", f"the temperature_c column: median of {n} rows")}
