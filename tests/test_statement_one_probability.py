@@ -115,3 +115,33 @@ def test_the_guard_band_note_and_the_probability_model_name_the_items_p(p, shown
     note = interval_band_note([("M", c.to_json())], labels(lang), lambda k: k, lambda k: "",
                               lambda k: p)
     assert f"{shown} %" in note and f"1 − p = {q} %" in note and f"{h} %" in note, note
+
+
+@pytest.mark.parametrize("spec", ["jjf1535-2015", "iec62047-20"])
+def test_rate_summary_states_the_nu_of_each_chi2_interval(shared_demo, spec):
+    """summary.txt gives an item stated by a χ² interval (a standard deviation, or a
+    dispersion's bound-condition limit) with the ν its interval was computed with — the
+    number the certificate's ν column prints (its span), never dropped."""
+    import json
+    import re
+
+    from gonio.result.statement import chi2_nu, chi2_stated_nu
+
+    out = shared_demo(spec, seed=1)
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    html = (out / "certificate.html").read_text(encoding="utf-8")
+    lines = (out / "summary.txt").read_text(encoding="utf-8").splitlines()
+    seen = 0
+    for key, it in res["items"].items():
+        unc = it.get("uncertainty") or {}
+        if not it.get("measured") or not chi2_stated_nu(unc.get("k_source")) \
+                or unc.get("interval") is None:
+            continue
+        nu = f"{chi2_nu(unc['nu_eff']):g}"
+        m = re.search(rf'data-src="items\.{key}\.uncertainty\.nu_eff"[^>]*>([^<]+)<', html)
+        assert m and m.group(1) == nu, (key, m and m.group(1), nu)
+        head = f"  {it['clause']} "
+        row = [ln for ln in lines if ln.startswith(head) and "upper bound" in ln]
+        assert any(ln.endswith(f"; ν = {nu}") for ln in row), (key, row)
+        seen += 1
+    assert seen >= 2

@@ -40,8 +40,18 @@ def virtual_line(res: dict) -> list[str]:
 
 def item_text(it) -> str:
     """``value ± U unit (k, ν_eff, p)`` of one measured item by the one statement rule
-    (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers)."""
-    return item_statement(it.to_json()).text()        # as results.json states it (ν_eff ∞: null)
+    (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers);
+    an item stated by a χ² interval (a standard deviation's, or a dispersion's bound-condition
+    limit) adds the ν that interval was computed with, "; ν = 105", as the certificate's ν
+    column prints it (never ∞: :func:`gonio.result.statement.chi2_nu`)."""
+    from gonio.result.statement import chi2_nu, chi2_stated_nu
+
+    doc = it.to_json()
+    st = item_statement(doc)                           # as results.json states it (ν_eff ∞: null)
+    unc = doc.get("uncertainty") or {}
+    nu = (chi2_nu(float(unc["nu_eff"])) if st.interval is not None and unc.get("nu_eff")
+          is not None and chi2_stated_nu(unc.get("k_source")) else None)
+    return st.text() if nu is None else f"{st.text()}; ν = {nu:g}"
 
 
 def band_text(w: float) -> str:
