@@ -95,6 +95,13 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
     >>> contradictions({"room_temperature_c": "22.5"}, lab, None, ("temperature_c",))
     []
 
+    Both keys given: each is compared (a room line of 35 °C below an agreeing
+    ``temperature_c`` is a contradiction too):
+
+    >>> [c["key"] for c in contradictions({"temperature_c": "20.0",
+    ...                                    "room_temperature_c": "35"}, lab)]
+    ['room_temperature_c']
+
     A stated condition that is no number is refused, never passed as silent:
 
     >>> contradictions({"temperature_c": "30,0"}, lab)
@@ -118,8 +125,10 @@ def contradictions(metadata: dict, lab: dict | None, measured: dict | None = Non
         theirs = (lab.get(section) or {}).get(key)
         if theirs is None:
             continue
-        k, text = _first(metadata, md_keys)
-        stated = [(k, text, None)] if text is not None else []
+        # every key that states it (a "# temperature_c" and a "# room_temperature_c" line
+        # both: each is compared, never the first alone)
+        stated = [(k, str(metadata[k]).strip(), None) for k in md_keys
+                  if metadata.get(k) is not None and str(metadata[k]).strip()]
         if md_keys and md_keys[0] in (measured or {}):    # what the readings measured too
             stated.append((md_keys[0], *measured[md_keys[0]]))
         default = TEMPERATURE_TOLERANCE_C if what == "temperature" else HUMIDITY_TOLERANCE_PCT
