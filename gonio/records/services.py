@@ -2369,16 +2369,26 @@ def last_changer(s: Session, cal_id: int) -> int | None:
 
 def amendment_changers(s: Session, cal_id: int) -> set[int]:
     """The users who changed a calibration (its ``attach`` audit events: standards,
-    environment) since its latest amendment was asked for (its latest ``amend`` event)."""
+    environment) since its latest amendment was asked for (its latest ``amend`` event), and
+    those who changed one of its standards' details since (an ``update`` of the standard:
+    the amended certificate states the standards as the records hold them at its issue)."""
     asked = s.scalar(select(func.max(AuditEvent.id)).where(
         AuditEvent.action == "amend", AuditEvent.entity == "calibration",
         AuditEvent.entity_id == str(int(cal_id))))
     if asked is None:
         return set()
-    return set(s.scalars(select(AuditEvent.user_id).where(
+    used = [str(i) for i in s.scalars(select(CalibrationStandard.standard_id).where(
+        CalibrationStandard.calibration_id == int(cal_id)))]
+    changed = set(s.scalars(select(AuditEvent.user_id).where(
         AuditEvent.action == "attach", AuditEvent.entity == "calibration",
         AuditEvent.entity_id == str(int(cal_id)), AuditEvent.id > asked,
         AuditEvent.user_id.is_not(None))))
+    if used:
+        changed |= set(s.scalars(select(AuditEvent.user_id).where(
+            AuditEvent.action == "update", AuditEvent.entity == "standard",
+            AuditEvent.entity_id.in_(used), AuditEvent.id > asked,
+            AuditEvent.user_id.is_not(None))))
+    return changed
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],

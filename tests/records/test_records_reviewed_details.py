@@ -130,6 +130,30 @@ def test_an_instrument_edit_during_an_amendment_is_a_change(store, people, compu
     assert "RLG-0002" in page
 
 
+def test_a_standard_edit_during_an_amendment_is_a_change(store, people, computed_folder,
+                                                         bench_readings, monkeypatch):
+    """One changes, another approves: a standard of the calibration edited in the register
+    during its amendment (the amended certificate states it as edited) counts as a change by
+    the editor, who then does not approve the amendment (before: the editor approved it)."""
+    from gonio.records.models import CalibrationStandard
+    from sqlalchemy import select
+
+    services.set_settings(store, people["admin"], min_people="2")
+    tr = services.update_user(store, None, "tech", roles="technician reviewer admin")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    first = run_issue(store, monkeypatch)
+    services.amend(store, people["rev2"], first.id, "standard's certificate misread")
+    with store.session() as s:
+        std_id = s.scalars(select(CalibrationStandard.standard_id).where(
+            CalibrationStandard.calibration_id == cal.id)).first()
+    services.update_standard(store, tr, std_id, certificate="NIM-2026-9999")
+    with pytest.raises(GonioError, match="changed the calibration during its amendment"):
+        services.approve(store, tr, cal.id)
+    assert services.approve(store, people["rev"], cal.id).status == "issuing"
+
+
 def test_who_last_changed_and_reviewed_does_not_approve_alone(store, people, computed_folder,
                                                               bench_readings, monkeypatch):
     services.set_settings(store, people["admin"], min_people="2")
