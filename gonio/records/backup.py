@@ -980,8 +980,9 @@ def consistency_problems(store) -> list[str]:
     """What the records' rows say of each other that cannot be (one line each): an issued
     calibration without a certificate; a year's certificate counter behind a number issued
     or reserved in that year (the next approval would use it again); a certificate whose
-    approver created the calibration it first certifies (ISO/IEC 17025 7.8.1.1: refused on
-    every path, so such a row was written around the records)."""
+    approver created the calibration it first certifies, or a calibration reviewed by its
+    creator (ISO/IEC 17025 7.8.1.1: refused on every path, so such a row was written around
+    the records)."""
     from gonio.records.models import Calibration, Certificate, CertificateCounter
     from gonio.records.services import NUMBER_PREFIX
 
@@ -1008,4 +1009,10 @@ def consistency_problems(store) -> list[str]:
             if approver is not None and approver == creator:
                 out.append(f"certificate {number}: approved by the person who created its "
                            "calibration")
+        for cid, reviewer in s.execute(
+                select(Calibration.id, Calibration.reviewed_by_id)
+                .where(Calibration.reviewed_by_id.is_not(None),
+                       Calibration.reviewed_by_id == Calibration.created_by_id)
+                .order_by(Calibration.id)):
+            out.append(f"calibration {cid}: reviewed by the person who created it")
     return out

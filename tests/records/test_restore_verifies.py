@@ -65,13 +65,19 @@ def creator_approves(t):
     cal["rows"][0][col(cal, "created_by_id")] = cert["rows"][0][col(cert, "issued_by_id")]
 
 
+def creator_reviews(t):
+    cal = t["calibrations"]
+    cal["rows"][0][col(cal, "reviewed_by_id")] = cal["rows"][0][col(cal, "created_by_id")]
+
+
 @pytest.mark.parametrize("change,said", [
     (scaled_value, "differs from the stored results.json"),
     (no_certificates, "issued, and no certificate of it is recorded"),
     (counter_back, "beyond the 20"),
     # the creator column rewritten: first against its own audit trail (the trail names the
     # calibration's real creator), then the approver check behind it
-    (creator_approves, "its recorded creator is not the one its audit trail")])
+    (creator_approves, "its recorded creator is not the one its audit trail"),
+    (creator_reviews, "reviewed by the person who created it")])
 def test_a_tampered_archive_is_not_restored(issued_archive, tmp_path, change, said):
     _, good = issued_archive
     bad = tmp_path / "bad.zip"
