@@ -289,6 +289,37 @@ def virtual_readings(store, readings_sha256: str | None) -> bool:
     return got
 
 
+#: results.json SHA-256 → whether the stored result's provenance is the virtual bench's
+#: (content-addressed: read once per blob folder)
+_VIRTUAL_RESULTS: dict[tuple[str, str], bool] = {}
+
+
+def virtual_calibration(store, readings_sha256: str | None,
+                        results_sha256: str | None = None) -> bool:
+    """Whether a calibration is the virtual bench's, as the lists mark it: its stored readings
+    (:func:`virtual_readings`), or the provenance of its stored result
+    (:func:`gonio.formats.provenance.result_provenance`), which also holds the evidence of
+    the files the readings name (a triad's ``thermal.csv`` with its ``# bench:`` lines beside
+    readings that show none) — the calibration's own page marks it by the same result."""
+    if virtual_readings(store, readings_sha256):
+        return True
+    if not results_sha256:
+        return False
+    from gonio.errors import GonioError
+    from gonio.formats.provenance import result_provenance
+
+    key = (str(store.blob_root), results_sha256)
+    got = _VIRTUAL_RESULTS.get(key)
+    if got is None:
+        try:
+            doc = stored_result(store, results_sha256)
+        except (GonioError, OSError, ValueError, RecursionError):
+            return False
+        got = isinstance(doc, dict) and bool(result_provenance(doc)["virtual"])
+        _VIRTUAL_RESULTS[key] = got
+    return got
+
+
 def certificates(store, page: int = 1, size: int = 50):
     """(issued certificates, newest first, total)."""
     stmt = select(Certificate).options(
@@ -495,7 +526,8 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                  "status", "created_by", "error", "virtual_bench"],
                 [[c.id, c.instrument.customer.name, c.instrument.serial, c.spec_key,
                   c.performed_on, c.status, c.created_by.username if c.created_by else "",
-                  c.error, "yes" if virtual_readings(store, c.readings_sha256) else ""]
+                  c.error, "yes" if virtual_calibration(store, c.readings_sha256,
+                                                        c.results_sha256) else ""]
                  for c in rows])
     if name == "certificates":
         rows, _ = certificates(store, 1, big)
@@ -504,7 +536,8 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                 [[c.number, c.issued_at, c.calibration_id, c.calibration.instrument.customer
                   .name, c.calibration.instrument.serial, c.replaces.number if c.replaces
                   else "", c.reason, c.seal_sha256, c.pdf_sha256,
-                  "yes" if virtual_readings(store, c.calibration.readings_sha256) else ""]
+                  "yes" if virtual_calibration(store, c.calibration.readings_sha256,
+                                               c.calibration.results_sha256) else ""]
                  for c in rows])
     if name == "due":
         rows, _ = due(store, 1, big, params.get("q", ""), params.get("within_days", 30),

@@ -60,16 +60,16 @@ def fmt(x, digits: int = 6) -> str:
 
 
 @pass_context
-def virtual_tag(ctx, readings_sha256: str | None) -> str:
-    """A list's mark for a calibration whose readings are the virtual bench's
-    (:func:`gonio.records.queries.virtual_readings`), in the certificate banner's words; ""
-    otherwise."""
-    from gonio.records.queries import virtual_readings
+def virtual_tag(ctx, readings_sha256: str | None, results_sha256: str | None = None) -> str:
+    """A list's mark for a calibration that is the virtual bench's, by its readings or its
+    stored result (:func:`gonio.records.queries.virtual_calibration`), in the certificate
+    banner's words; "" otherwise."""
+    from gonio.records.queries import virtual_calibration
     from gonio.report.i18n import labels
 
     request = ctx.get("request")
     store = getattr(getattr(getattr(request, "app", None), "state", None), "store", None)
-    if store is None or not virtual_readings(store, readings_sha256):
+    if store is None or not virtual_calibration(store, readings_sha256, results_sha256):
         return ""
     return labels("en")["virtual"]
 
