@@ -24,7 +24,8 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :func:`lookup`, :func:`item_nums`,
                                 :func:`conformity_texts`, :func:`no_probability_note`,
                                 :func:`measured_note`, :func:`condition_text`,
-                                :func:`interval_band_note`, :func:`declaration_parts`, :func:`interval_legend`
+                                :func:`interval_band_note`, :func:`stated_p`,
+                                :func:`declaration_parts`, :func:`interval_legend`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
                                 :func:`legend_above`, :func:`plain_axes`,
                                 :func:`empty_panel`, :func:`plain_log_ticks`,
