@@ -111,17 +111,27 @@ def test_a_database_edit_is_refused_at_approval_and_never_issued(store, people,
     assert "RLG-0001" in page and "FAKE-9999" not in page
 
 
-def test_an_instrument_edit_during_an_amendment_is_a_change(store, people, computed_folder,
-                                                            bench_readings, monkeypatch):
-    """One changes, another approves: the serial corrected in the register during an
-    amendment counts as a change of it (before: only an attach did)."""
+def amending(store, people, computed_folder, bench_readings, monkeypatch, reason: str,
+             tech_roles: str):
+    """A two-person laboratory's calibration issued (reviewed and approved by rev) and its
+    amendment asked for by rev2 with ``reason``; tech given ``tech_roles``. Returns (the
+    calibration, tech)."""
     services.set_settings(store, people["admin"], min_people="2")
-    tr = services.update_user(store, None, "tech", roles="technician reviewer")
+    tr = services.update_user(store, None, "tech", roles=tech_roles)
     cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
     services.review(store, people["rev"], cal.id, accept=True)
     services.approve(store, people["rev"], cal.id)
     first = run_issue(store, monkeypatch)
-    services.amend(store, people["rev2"], first.id, "serial misread")
+    services.amend(store, people["rev2"], first.id, reason)
+    return cal, tr
+
+
+def test_an_instrument_edit_during_an_amendment_is_a_change(store, people, computed_folder,
+                                                            bench_readings, monkeypatch):
+    """One changes, another approves: the serial corrected in the register during an
+    amendment counts as a change of it (before: only an attach did)."""
+    cal, tr = amending(store, people, computed_folder, bench_readings, monkeypatch,
+                       "serial misread", "technician reviewer")
     services.update_instrument(store, tr, cal.instrument_id, serial="RLG-0002")
     with pytest.raises(GonioError, match="changed the calibration during its amendment"):
         services.approve(store, tr, cal.id)
@@ -138,13 +148,8 @@ def test_a_standard_edit_during_an_amendment_is_a_change(store, people, computed
     from gonio.records.models import CalibrationStandard
     from sqlalchemy import select
 
-    services.set_settings(store, people["admin"], min_people="2")
-    tr = services.update_user(store, None, "tech", roles="technician reviewer admin")
-    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
-    services.review(store, people["rev"], cal.id, accept=True)
-    services.approve(store, people["rev"], cal.id)
-    first = run_issue(store, monkeypatch)
-    services.amend(store, people["rev2"], first.id, "standard's certificate misread")
+    cal, tr = amending(store, people, computed_folder, bench_readings, monkeypatch,
+                       "standard's certificate misread", "technician reviewer admin")
     with store.session() as s:
         std_id = s.scalars(select(CalibrationStandard.standard_id).where(
             CalibrationStandard.calibration_id == cal.id)).first()
