@@ -29,17 +29,23 @@ def register(sub) -> None:
                         "machine's IANA zone, UTC where it cannot be determined; written once "
                         "into the store, which every process then reads)")
     q.set_defaults(func=run_init)
-    q = dsub.add_parser("create-user", help="add a user (password from $GONIO_PASSWORD or asked)")
+    q = dsub.add_parser("create-user", help="add a user (an administrator's login, --user; "
+                                            "the new password from $GONIO_NEW_PASSWORD or "
+                                            "asked)")
     add_store_options(q)
     q.add_argument("username")
     q.add_argument("--roles", default="technician",
                    help="space- or comma-separated: technician, reviewer, admin")
     q.add_argument("--full-name", default="")
+    add_admin_option(q)
     q.set_defaults(func=run_create_user)
     q = dsub.add_parser("set-user", help="deactivate or reactivate a user, change the roles, "
-                                         "reset the password ($GONIO_PASSWORD or asked)")
+                                         "reset the password (an administrator's login, "
+                                         "--user; the new password from $GONIO_NEW_PASSWORD "
+                                         "or asked)")
     add_store_options(q)
     q.add_argument("username")
+    add_admin_option(q)
     g = q.add_mutually_exclusive_group()
     g.add_argument("--deactivate", dest="active", action="store_const", const=False)
     g.add_argument("--activate", dest="active", action="store_const", const=True)
@@ -544,13 +550,41 @@ def run_init(args) -> int:
     return 0
 
 
+def add_admin_option(q) -> None:
+    """``--user ADMIN`` of the commands that manage users (:func:`managing_admin`)."""
+    q.add_argument("--user", default=None, metavar="ADMIN",
+                   help="the active administrator doing it (default $GONIO_USER), with "
+                        "their password in $GONIO_PASSWORD or asked; needed once the records "
+                        "have an active administrator")
+
+
+def managing_admin(store, name: str | None, command: str):
+    """The administrator managing users on the command line: the records user ``name`` (else
+    ``$GONIO_USER``) logged in with their password (:func:`logged_in`) and holding the admin
+    role. With no name given this is None only while the records have no active
+    administrator (setting up a new database: the first users, ``actor=None`` in the audit
+    trail); once they have one, a GonioError (one line) asks for the login, so that an
+    account on the machine cannot create, promote or take over records users."""
+    from gonio.records import queries, services
+
+    name = name or os.environ.get("GONIO_USER") or None
+    if name is None:
+        if not queries.active_admins(store):
+            return None
+        raise GonioError(f"{command}: the records have an active administrator, who does "
+                         "this: give --user ADMIN (or $GONIO_USER), with their password in "
+                         "$GONIO_PASSWORD or asked", key="--user")
+    return services.require(logged_in(store, name, command), "admin")
+
+
 def run_create_user(args) -> int:
     from gonio.records import services
 
-    password = _password(args.username)
     store = _store(args)
     try:
-        u = services.create_user(store, None, args.username, password,
+        admin = managing_admin(store, args.user, "db create-user")
+        password = new_password(args.username, admin is None)
+        u = services.create_user(store, admin, args.username, password,
                                  args.roles.replace(",", " "), args.full_name)
         print(f"user {u.username} ({u.roles})")
     finally:
@@ -558,23 +592,29 @@ def run_create_user(args) -> int:
     return 0
 
 
-def _password(username: str) -> str:
-    password = os.environ.get("GONIO_PASSWORD")
+def new_password(username: str, setting_up: bool) -> str:
+    """The new password of ``username``: ``$GONIO_NEW_PASSWORD``, else (``setting_up``: no
+    administrator logged in with ``$GONIO_PASSWORD``) ``$GONIO_PASSWORD``, else asked on the
+    terminal; a GonioError (one line) where none is given and no terminal can ask."""
+    password = os.environ.get("GONIO_NEW_PASSWORD")
+    if password is None and setting_up:
+        password = os.environ.get("GONIO_PASSWORD")
     if password is None:
         if not sys.stdin.isatty():
-            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
-                             key="password")
-        password = getpass.getpass(f"password for {username}: ")
+            raise GonioError("give the new password in $GONIO_NEW_PASSWORD (no terminal to "
+                             "ask on)", key="password")
+        password = getpass.getpass(f"new password for {username}: ")
     return password
 
 
 def run_set_user(args) -> int:
     from gonio.records import services
 
-    password = _password(args.username) if args.reset_password else None
     store = _store(args)
     try:
-        u = services.update_user(store, None, args.username, active=args.active,
+        admin = managing_admin(store, args.user, "db set-user")
+        password = new_password(args.username, admin is None) if args.reset_password else None
+        u = services.update_user(store, admin, args.username, active=args.active,
                                  roles=None if args.roles is None
                                  else args.roles.replace(",", " "), password=password)
         print(f"user {u.username} ({u.roles}; {'active' if u.active else 'deactivated'})"

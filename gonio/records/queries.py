@@ -460,6 +460,11 @@ def users(store):
         return s.scalars(select(User).order_by(User.username)).all()
 
 
+def active_admins(store) -> list[str]:
+    """The user names of the active users holding the admin role, sorted."""
+    return [u.username for u in users(store) if u.active and "admin" in u.roles.split()]
+
+
 def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
                  entity_id: str = "", username: str = ""):
     """(audit events newest first, total), filtered by record (``entity`` such as

@@ -10,6 +10,7 @@ from sqlalchemy import select
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.records import auth, services
+from gonio.records.db import open_store
 from gonio.records.models import AuditEvent
 
 from .conftest import PASSWORD, conditions, make_people
@@ -42,15 +43,73 @@ def test_deactivate_reset_and_roles_with_audit(sqlite_store):
 
 def test_set_user_from_the_command_line(tmp_path, monkeypatch, capsys):
     data = str(tmp_path / "data")
+    monkeypatch.delenv("GONIO_USER", raising=False)
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
     assert main(["db", "create-user", "admin", "--roles", "admin", "--data", data]) == 0
-    assert main(["db", "create-user", "alice", "--data", data]) == 0
-    monkeypatch.setenv("GONIO_PASSWORD", "another long password")
+    monkeypatch.setenv("GONIO_NEW_PASSWORD", "alice's own password")
+    assert main(["db", "create-user", "alice", "--user", "admin", "--data", data]) == 0
+    monkeypatch.setenv("GONIO_NEW_PASSWORD", "another long password")
     assert main(["db", "set-user", "alice", "--deactivate", "--roles", "reviewer",
-                 "--reset-password", "--data", data]) == 0
+                 "--reset-password", "--user", "admin", "--data", data]) == 0
     assert "alice (reviewer; deactivated); password reset" in capsys.readouterr().out
-    assert main(["db", "set-user", "admin", "--deactivate", "--data", data]) == 2
-    assert "last active admin" in capsys.readouterr().err
+    assert main(["db", "set-user", "admin", "--deactivate", "--user", "admin",
+                 "--data", data]) == 2
+    assert "deactivate yourself" in capsys.readouterr().err
+    st = open_store(None, data)
+    try:
+        services.update_user(st, None, "alice", active=True)
+        assert auth.authenticate(st, "alice", "another long password").username == "alice"
+        with st.session() as s:
+            who = [(e.action, e.username) for e in s.scalars(select(AuditEvent).where(
+                AuditEvent.entity == "user").order_by(AuditEvent.id))]
+    finally:
+        st.close()
+    # the first admin set up without a login; alice created and changed by the admin's login
+    assert who[0][0] == "create" and who[1:] == [("command-line login", "admin"),
+                                                  ("create", "admin"),
+                                                  ("command-line login", "admin"),
+                                                  ("update", "admin"),
+                                                  ("command-line login", "admin"),
+                                                  ("update", "(system)")], who
+
+
+def test_users_cannot_be_managed_without_an_admin_login(tmp_path, monkeypatch, capsys):
+    """Once the records have an active administrator, an account on the machine cannot create
+    a user, promote one, reset a password or reactivate one without an admin's login."""
+    data = str(tmp_path / "data")
+    monkeypatch.delenv("GONIO_USER", raising=False)
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "tech", "--roles", "technician", "--data", data]) == 0
+    # no active admin yet: still setting up
+    assert main(["db", "create-user", "boss", "--roles", "admin", "--data", data]) == 0
+    capsys.readouterr()
+    attempts = (["db", "create-user", "mallory", "--roles", "admin"],
+                ["db", "set-user", "tech", "--roles", "admin technician"],
+                ["db", "set-user", "boss", "--reset-password"],
+                ["db", "set-user", "tech", "--deactivate"])
+    for argv in attempts:
+        assert main(argv + ["--data", data]) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err, err
+        assert "active administrator" in err and "--user ADMIN" in err, err
+        # a technician's login is not an admin's; a wrong password is no login
+        assert main(argv + ["--user", "tech", "--data", data]) == 2, argv
+        assert "admin role" in capsys.readouterr().err
+        monkeypatch.setenv("GONIO_PASSWORD", "not the password")
+        assert main(argv + ["--user", "boss", "--data", data]) == 2, argv
+        assert "'boss'" in capsys.readouterr().err
+        monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    monkeypatch.setenv("GONIO_USER", "tech")
+    assert main(["db", "create-user", "mallory", "--data", data]) == 2
+    assert "admin role" in capsys.readouterr().err
+    st = open_store(None, data)
+    try:
+        assert services.user(st, "mallory") is None
+        assert services.user(st, "tech").roles == "technician" and services.user(
+            st, "tech").active
+        assert auth.authenticate(st, "boss", "long enough password").username == "boss"
+    finally:
+        st.close()
 
 
 def test_web_user_management_and_what_technicians_read(app, sqlite_store):  # noqa: F811
