@@ -2250,7 +2250,8 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     and changes, the creator approves), with 3 never. The same for a first issue: who
     reviewed it and last changed its details (:func:`last_changer`) does not approve it.
     The person the readings name as their operator (:func:`readings_operator`, matched by
-    full name or user name, case and spacing folded) counts as the creator."""
+    user name or any full name they hold or held, :func:`names_held`, case and spacing
+    folded) counts as the creator."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
@@ -2269,8 +2270,7 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
                          "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
     operator = readings_operator(s, cal)
     if operator and not (amending and min_people(s) == 2) \
-            and _printed_name(operator) in {_printed_name(_name(actor)),
-                                            _printed_name(actor.username)}:
+            and _printed_name(operator) in names_held(s, actor):
         raise GonioError(f"the readings name {actor.username!r} ({operator!r}) as their "
                          f"operator: the person who measured may not {action} the "
                          "calibration (ISO/IEC 17025 7.8.1.1: a second person)", key="role")
@@ -2333,6 +2333,26 @@ def check_trail(s: Session, cal: Calibration, action: str) -> None:
         raise GonioError(f"calibration {cal.id}: {found[0]}{more}: nothing to {action} "
                          "(gonio db verify lists it; restore the records from a backup)",
                          key=f"calibration {cal.id}")
+
+
+def names_held(s: Session, u: User) -> set[str]:
+    """Every name ``u`` is or was known by, as :func:`_printed_name` folds it: the user name,
+    the full name now and each full name the audit trail's user events recorded for them
+    (a renamed person is still the operator their readings name).
+
+    A name given up stays theirs here, so a later user given the same name is matched too:
+    the check errs towards a second person."""
+    names = {_printed_name(u.username), _printed_name(_name(u))}
+    for ev in s.scalars(select(AuditEvent).where(AuditEvent.entity == "user",
+                                                 AuditEvent.entity_id == str(u.id))):
+        for blob in (ev.before_json, ev.after_json):
+            try:
+                full = (json.loads(blob or "{}") or {}).get("full_name")
+            except (ValueError, AttributeError):
+                continue
+            if isinstance(full, str) and full.strip():
+                names.add(_printed_name(full))
+    return names
 
 
 def readings_operator(s: Session, cal: Calibration) -> str:

@@ -272,3 +272,24 @@ def test_the_readings_operator_neither_reviews_nor_approves(store, people, compu
     with pytest.raises(GonioError, match="may not approve"):
         services.approve(store, measured, cal.id)
     assert services.approve(store, people["rev2"], cal.id).status == "issuing"
+
+
+def test_a_renamed_operator_still_does_not_review(store, people, computed_folder,
+                                                  bench_readings, monkeypatch):
+    """Renaming the operator (a new full name, by an admin) does not make the person the
+    readings name a second person: every full name the trail recorded for them counts."""
+    from .conftest import PASSWORD
+
+    measured = services.create_user(store, None, "vb", PASSWORD, "reviewer",
+                                    full_name="Virtual Bench")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.update_user(store, people["admin"], "vb", full_name="Someone Else")
+    measured = services.user(store, "vb")
+    assert measured.full_name == "Someone Else"
+    with pytest.raises(GonioError, match=r"as their operator: the person who measured "
+                                         r"may not review"):
+        services.review(store, measured, cal.id, accept=True)
+    # a person never known by the operator's name reviews
+    services.review(store, people["rev"], cal.id, accept=True)
+    with store.session() as s:
+        assert services.names_held(s, measured) == {"vb", "someone else", "virtual bench"}
