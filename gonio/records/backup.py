@@ -961,10 +961,11 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
                   ("its approval", approved if status in ("issuing", "amending") else ""),
                   (f"certificate {newest.get(cid, ('', ''))[0]}",
                    newest.get(cid, ("", ""))[1] or "")]
-        for what, sealed in signed:
+        for (what, sealed), action in zip(signed, ("review", "approve", "approve")):
             if sealed and sealed != now:
                 problems.append(f"calibration {cid}: its stored result no longer matches the "
-                                f"seal of {what}")
+                                f"seal of {what}"
+                                f"{services.seal_differences(store, cid, action)}")
         if status in ("reviewed", "issuing"):     # what was reviewed is what is approved
             problems += [f"calibration {cid}: {line}"
                          for line in services.details_changed(store, cid)]

@@ -2412,10 +2412,14 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
-                number: bool = False, check=None, **changes) -> Calibration:
+                number: bool = False, check=None, sealed_files: dict | None = None,
+                **changes) -> Calibration:
     """Check the state (and the second person; ``check(s, cal)``: the caller's own check
     after those), apply ``changes``, audit — one transaction; with ``number`` a certificate
-    number is reserved in it (none is used up by a refusal)."""
+    number is reserved in it (none is used up by a refusal). ``sealed_files`` (the stored
+    files' digests the signed seal covers, :func:`sealed_content`) go into the audit event
+    beside the row's state, so that a later mismatch names the file
+    (:func:`seal_differences`)."""
     with store.writing() as s:
         cal = _check(s, actor, cal_id, action, allowed)
         if check is not None:
@@ -2425,7 +2429,10 @@ def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str
             changes["pending_number"] = _reserve_number(s, utcnow().year)
         for k, v in changes.items():
             setattr(cal, k, v)
-        audit(s, actor, action, "calibration", cal.id, before, state(cal))
+        after = state(cal)
+        if sealed_files is not None:
+            after["sealed_files"] = dict(sealed_files)
+        audit(s, actor, action, "calibration", cal.id, before, after)
         s.commit()
     return cal
 
@@ -2440,9 +2447,11 @@ def review(store, actor: User, cal_id: int, *, accept: bool, comment: str = "",
     comment = text(comment, "comment", max_len=MAX_TEXT, multiline=True)
     if not accept and not comment:
         raise GonioError("say why the calibration is rejected", key="comment")
-    signed = seal(store, cal_id)
+    content = sealed_content(store, cal_id)
+    signed = seal_of(content)
     _signs(signed, shown_seal)
     return _transition(store, actor, cal_id, "review", ("computed",),
+                       sealed_files=content["files"],
                        status="reviewed" if accept else "rejected", reviewed_by_id=actor.id,
                        reviewed_at=utcnow(), review_comment=comment, reviewed_seal=signed)
 
@@ -2459,7 +2468,22 @@ _ROW_SEALED = ("key", "title", "clause", "unit", "measured", "value", "U", "k")
 
 
 def seal(store, cal_id: int) -> str:
-    """The content hash of a calibration's stored result, which the reviewer and the
+    """The seal of a calibration's stored result now: :func:`seal_of` its
+    :func:`sealed_content`."""
+    return seal_of(sealed_content(store, cal_id))
+
+
+def seal_of(content: dict) -> str:
+    """SHA-256 of the canonical JSON of :func:`sealed_content`."""
+    import hashlib
+
+    doc = json.dumps(content, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(doc.encode("utf-8")).hexdigest()
+
+
+def sealed_content(store, cal_id: int) -> dict:
+    """What the seal of a calibration's stored result covers (``files``: name → SHA-256;
+    ``items``; the register entry used). The content hash of a calibration's stored result, which the reviewer and the
     approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
     digests (results.json, summary, draft certificate) and every result row (key, title,
     clause, unit, measured, value, U, k), and where the calibration used an entry of the
@@ -2473,8 +2497,6 @@ def seal(store, cal_id: int) -> str:
     row changed in the database, a file changed on disk, the link to the readings). The kept statement is not hashed:
     it follows from results.json, whose digest is, so a seal signed before rows kept it
     stays the seal."""
-    import hashlib
-
     with store.session() as s:
         cal = s.get(Calibration, int(cal_id))
         if cal is None:
@@ -2519,8 +2541,36 @@ def seal(store, cal_id: int) -> str:
         sealed["table_calibration_entry"] = {
             "id": entry.id, "standard_id": entry.standard_id, "sha256": entry.sha256,
             "valid_from": entry.valid_from.isoformat(), "due_on": entry.due_on.isoformat()}
-    doc = json.dumps(sealed, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(doc.encode("utf-8")).hexdigest()
+    return sealed
+
+
+def seal_differences(store, cal_id: int, action: str) -> str:
+    """The stored files of a calibration that are not the ones its latest ``action``
+    ("review" or "approve") signed, as the audit event recorded them (``sealed_files``), in
+    one phrase (" — lab.toml is not the file signed (SHA-256 1a2b3c4d… now, 5e6f7a8b…
+    signed)"); "" where the event recorded none (signed before files were recorded) or every
+    file is the one signed (a row, the register entry or the seal itself then differs)."""
+    with store.session() as s:
+        blob = s.scalar(select(AuditEvent.after_json).where(
+            AuditEvent.entity == "calibration", AuditEvent.entity_id == str(int(cal_id)),
+            AuditEvent.action == action).order_by(AuditEvent.id.desc()).limit(1))
+    try:
+        signed = (json.loads(blob or "{}") or {}).get("sealed_files")
+    except (ValueError, AttributeError):
+        signed = None
+    if not isinstance(signed, dict):
+        return ""
+    try:
+        now = sealed_content(store, cal_id)["files"]
+    except GonioError:
+        return ""
+    lines = []
+    for name in sorted(set(now) | set(signed)):
+        a, b = now.get(name), signed.get(name)
+        if a != b:
+            lines.append(f"{name} is not the file signed (SHA-256 "
+                         f"{(a or '(none)')[:8]}… now, {(b or '(none)')[:8]}… signed)")
+    return (" — " + "; ".join(lines)) if lines else ""
 
 
 def _same_readings(results: dict, stored: str | None, cal_id) -> None:
@@ -2598,13 +2648,16 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
     cal = calibration(store, cal_id)
     if cal.status not in ("reviewed", "amending"):
         raise GonioError(f"cannot approve a calibration that is {cal.status}", key="status")
-    signed = seal(store, cal_id)
+    content = sealed_content(store, cal_id)
+    signed = seal_of(content)
     _signs(signed, shown_seal)
     before = cal.approved_seal if cal.status == "amending" else cal.reviewed_seal
     if signed != before:
+        which = seal_differences(store, cal_id,
+                                 "approve" if cal.status == "amending" else "review")
         raise GonioError("the stored result no longer matches the one reviewed (its seal "
-                         f"{signed[:12]}… is not the signed {before[:12] or '(none)'}…): "
-                         "nothing approved", key=f"calibration {cal_id}")
+                         f"{signed[:12]}… is not the signed {before[:12] or '(none)'}…"
+                         f"{which}): nothing approved", key=f"calibration {cal_id}")
     changed = details_changed(store, cal_id) if cal.status == "reviewed" else []
 
     def as_reviewed(s, cal):        # after the state, duties and completeness checks
@@ -2615,7 +2668,7 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
                              "(gonio db verify lists it)", key=f"calibration {cal_id}")
     return _transition(store, actor, cal_id, "approve", ("reviewed", "amending"),
                        number=True, check=as_reviewed, status="issuing",
-                       approved_by_id=actor.id,
+                       sealed_files=content["files"], approved_by_id=actor.id,
                        approved_at=utcnow(), approved_seal=signed,
                        progress="waiting for a worker", error="")
 
@@ -3040,11 +3093,12 @@ def _file_digests(s: Session, cal_id: int) -> dict:
         CalibrationFile.calibration_id == cal_id)).all())
 
 
-def _approved(signed: str, approved: str, what: str) -> None:
-    """The seal of the stored result now is the one the approver signed."""
+def _approved(signed: str, approved: str, what: str, which: str = "") -> None:
+    """The seal of the stored result now is the one the approver signed (``which``: the
+    files that differ, :func:`seal_differences`)."""
     if not approved or signed != approved:
         raise GonioError("the stored result no longer matches the one reviewed and approved "
-                         f"(seal {signed[:12]}…, signed {approved[:12] or '(none)'}…): "
+                         f"(seal {signed[:12]}…, signed {approved[:12] or '(none)'}…{which}): "
                          f"nothing {what}", key="issue")
 
 
@@ -3054,7 +3108,9 @@ def sealed_result(store, cal_id: int) -> bytes:
     certificate is rendered from."""
     signed = seal(store, cal_id)
     cal = calibration(store, cal_id)
-    _approved(signed, cal.approved_seal, "issued")
+    _approved(signed, cal.approved_seal, "issued",
+              seal_differences(store, cal_id, "approve") if signed != cal.approved_seal
+              else "")
     with store.session() as s:
         check_trail(s, s.get(Calibration, cal_id), "issue")
         _not_withdrawn(s, cal, "issue")

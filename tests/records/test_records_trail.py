@@ -81,3 +81,33 @@ def test_stored_readings_damaged_after_approval_are_not_issued(store, people, co
     cal = services.calibration(store, cal.id)
     assert cal.status == "failed" and "stored readings are missing or do not match" in cal.error
     assert certificates(store) == []
+
+
+def test_a_swapped_stored_file_is_named_where_the_seal_breaks(store, people, computed_folder,
+                                                              bench_readings, monkeypatch):
+    """A stored file of a reviewed calibration pointed at another file in the database (the
+    laboratory file swapped) is refused at approval, and the refusal and ``gonio db verify``
+    name the file and both digests, not only the two seals."""
+    import io
+
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    with store.session() as s:
+        names = set(s.scalars(text("SELECT name FROM calibration_files WHERE "
+                                   "calibration_id = :c"), {"c": cal.id}))
+        signed = s.scalar(text("SELECT sha256 FROM calibration_files WHERE calibration_id = "
+                               ":c AND name = 'lab.toml'"), {"c": cal.id})
+    assert "lab.toml" in names and signed
+    other, _ = services.store_file(store, io.BytesIO(b"[laboratory]\nname = 'Another'\n"))
+    _sql(store, "UPDATE calibration_files SET sha256 = :h WHERE calibration_id = :c AND "
+                "name = 'lab.toml'", h=other, c=cal.id)
+    with pytest.raises(GonioError) as got:
+        services.approve(store, people["rev2"], cal.id)
+    msg = got.value.message
+    assert "no longer matches the one reviewed" in msg and "nothing approved" in msg, msg
+    assert f"lab.toml is not the file signed (SHA-256 {other[:8]}… now, {signed[:8]}… " \
+           "signed)" in msg, msg
+    assert "results.json is not" not in msg, msg         # only what differs is named
+    _, problems = backup.verify(store)
+    assert any(f"calibration {cal.id}: its stored result no longer matches the seal of its "
+               "review — lab.toml is not the file signed" in p for p in problems), problems
