@@ -312,10 +312,11 @@ def parse_number(text: str) -> float | None:
 
 def logged_median(path, column: str = "temperature_c", skip=None) -> tuple[float, int] | None:
     r"""The median of the finite values a CSV table (``#`` comment lines above or among its
-    rows) logged in ``column``, and how many rows gave one: (median, n); None where the table
-    has no such column or no finite value in it (a blank between a slow logger's rows is no
-    value). ``skip(header, row)``: rows left out (a rate file's chamber tests). Read row by
-    row, for the identity check's ``measured_conditions``.
+    rows) or a Parquet stream logged in ``column``, and how many rows gave one: (median, n);
+    None where the table has no such column or no finite value in it (a blank between a slow
+    logger's rows, a null, is no value; a Parquet file that cannot be read gives None, its
+    reader then names the fault). ``skip(header, row)``: CSV rows left out (a rate file's
+    chamber tests). Read row by row, for the identity check's ``measured_conditions``.
 
     >>> import tempfile, os
     >>> d = tempfile.mkdtemp(); f = os.path.join(d, "r.csv")
@@ -326,8 +327,22 @@ def logged_median(path, column: str = "temperature_c", skip=None) -> tuple[float
     import csv
     import math
     import statistics
+    from pathlib import Path
 
     values = []
+    if Path(path).suffix.lower() == ".parquet":
+        if skip is not None:
+            raise ValueError("skip applies to CSV rows only")
+        import pyarrow.parquet as pq
+
+        try:
+            if column not in pq.read_schema(path).names:
+                return None
+            col = pq.read_table(path, columns=[column]).column(0).to_pylist()
+        except (OSError, ValueError):
+            return None
+        values = [float(v) for v in col if isinstance(v, (int, float)) and math.isfinite(v)]
+        return (statistics.median(values), len(values)) if values else None
     with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = csv.reader(line for line in fh if line.strip() and not is_comment(line))
         header = [h.strip() for h in next(rows, [])]

@@ -742,25 +742,9 @@ def temperature_measured(path) -> dict:
     >>> temperature_measured(f)["temperature_c"][0]
     '20.2'
     """
-    import statistics
-
     from gonio.formats.metadata import logged_median
 
-    p = Path(path)
-    if p.suffix.lower() == ".parquet":
-        import pyarrow.parquet as pq
-
-        try:
-            if "temperature_c" not in pq.read_schema(p).names:
-                return {}
-            col = pq.read_table(p, columns=["temperature_c"]).column(0).to_numpy(
-                zero_copy_only=False)
-        except (OSError, ValueError):
-            return {}
-        values = [float(v) for v in col if v is not None and math.isfinite(float(v))]
-        found = (statistics.median(values), len(values)) if values else None
-    else:
-        found = logged_median(p)
+    found = logged_median(path)
     if found is None:
         return {}
     med, n = found
