@@ -2391,7 +2391,9 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
     """The users who changed a calibration (its ``attach`` audit events: standards,
     environment) since its latest amendment was asked for (its latest ``amend`` event), and
     those who changed one of its standards' details since (an ``update`` of the standard:
-    the amended certificate states the standards as the records hold them at its issue)."""
+    it reaches the amended certificate where the amendment attaches the standards again,
+    :func:`lab_details`; counted in any case, so that an editor of what the amendment may
+    state does not approve it)."""
     asked = s.scalar(select(func.max(AuditEvent.id)).where(
         AuditEvent.action == "amend", AuditEvent.entity == "calibration",
         AuditEvent.entity_id == str(int(cal_id))))
@@ -2909,6 +2911,8 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
             if final and not cal.pending_replaces_id:   # a first issue: the details reviewed
                 lab.update(_with_reviewed(lab, basis))
+            elif final and not standards_attached_in_amendment(s, cal.id):
+                lab["standards"] = amended_standards(s, cal, stds, lab["standards"], basis)
         elif cal.lab_sha256 and (own := lab_file(store, cal.lab_sha256, cal.lab_name,
                                                  cal.spec_key)).get("specification_limits"):
             # the calibration's own laboratory file (one naming only its table calibration
@@ -2944,6 +2948,67 @@ def reviewed_part(lab: dict) -> dict:
     cert = lab.get("certificate") or {}
     part["certificate"] = {k: cert[k] for k in REVIEWED_CERTIFICATE if k in cert}
     return part
+
+
+def amended_standards(s: Session, cal: Calibration, stds: list, live: list,
+                      drafted: dict) -> list:
+    """The standards an amendment of ``cal`` states (``stds`` the standards it names, ``live``
+    their register entries now, in that order; ``drafted`` its reviewed draft's details):
+    each as the certificate it replaces stated it (as it was when used: a recalibration
+    recorded in the register since does not reach the amendment), except one whose register
+    entry was edited since the amendment was asked for — the amendment's own correction,
+    which counts as a change of it (:func:`amendment_changers`) — which is stated as the
+    register holds it now. The replaced certificate's statement is its issue's audit event's
+    (:func:`stated_standards`); for a first certificate issued before those were kept, the
+    reviewed draft's (which it stated); a standard found in neither is stated as the register
+    holds it."""
+    asked = s.scalar(select(func.max(AuditEvent.id)).where(
+        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(cal.id)))
+    edited = set(s.scalars(select(AuditEvent.entity_id).where(
+        AuditEvent.action == "update", AuditEvent.entity == "standard",
+        AuditEvent.id > (asked or 0)))) if asked is not None else set()
+    kept = stated_standards(s, cal.pending_replaces_id)
+    if kept is None and _first_certificate(s, cal.pending_replaces_id):
+        kept = reviewed_part(drafted)["standards"] or []
+    by_id = {str(e.get("identifier")): e for e in (kept or []) if isinstance(e, dict)}
+    return [entry if str(st.id) in edited or st.identifier not in by_id
+            else by_id[st.identifier] for st, entry in zip(stds, live)]
+
+
+def standards_attached_in_amendment(s: Session, cal_id: int) -> bool:
+    """Whether an ``attach`` since the calibration's latest amendment was asked for changed
+    which standards it names (their identifiers before and after the attach differ)."""
+    asked = s.scalar(select(func.max(AuditEvent.id)).where(
+        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(int(cal_id))))
+    if asked is None:
+        return False
+    for before, after in s.execute(select(AuditEvent.before_json, AuditEvent.after_json).where(
+            AuditEvent.action == "attach", AuditEvent.entity == "calibration",
+            AuditEvent.entity_id == str(int(cal_id)), AuditEvent.id > asked)):
+        b, a = json.loads(before or "{}"), json.loads(after or "{}")
+        if b.get("standards") != a.get("standards"):
+            return True
+    return False
+
+
+def stated_standards(s: Session, cert_id: int) -> list | None:
+    """The standards an issued certificate stated, as its issue's audit event kept them
+    (:func:`store_issue`), or None where the event kept none (issued before they were
+    kept)."""
+    after = s.scalar(select(AuditEvent.after_json).where(
+        AuditEvent.action == "issue", AuditEvent.entity == "certificate",
+        AuditEvent.entity_id == str(int(cert_id))).order_by(AuditEvent.id.desc()).limit(1))
+    got = json.loads(after or "{}").get("stated_standards")
+    return got if isinstance(got, list) else None
+
+
+def _first_certificate(s: Session, cert_id: int) -> bool:
+    """Whether a certificate is its calibration's first issue (it replaces none): it stated
+    the standards of the reviewed draft."""
+    cert = s.get(Certificate, int(cert_id))
+    return cert is not None and cert.replaces_id is None
 
 
 def _with_reviewed(lab: dict, drafted: dict) -> dict:
@@ -3121,9 +3186,12 @@ def sealed_result(store, cal_id: int) -> bytes:
 ISSUED = ("certificate.html", "certificate.pdf", "certificate.dcc.xml")
 
 
-def store_issue(store, cal_id: int, out: Path) -> Certificate:
+def store_issue(store, cal_id: int, out: Path, stated_standards: list | None = None) -> Certificate:
     """Record an issued certificate: the files rendered from the sealed result and the
-    frozen certificate row, in one transaction (the seal checked again in it)."""
+    frozen certificate row, in one transaction (the seal checked again in it).
+    ``stated_standards``: the standards the certificate states (its laboratory details'
+    ``standards``, :func:`lab_details`), kept in the issue's audit event, from which an
+    amendment of it states them (:func:`stated_standards`)."""
     files = {n: blobs.put_file(store.blob_root, out / n) for n in ISSUED if (out / n).is_file()}
     signed = seal(store, cal_id)
     with store.writing() as s:
@@ -3155,8 +3223,10 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
         cal.amend_requested_by_id = None
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
         s.flush()
-        audit(s, None, "issue", "certificate", cert.id, before,
-              {"certificate": state(cert), "calibration": state(cal)})
+        after = {"certificate": state(cert), "calibration": state(cal)}
+        if stated_standards is not None:
+            after["stated_standards"] = list(stated_standards)
+        audit(s, None, "issue", "certificate", cert.id, before, after)
         s.commit()
     return cert
 

@@ -99,11 +99,13 @@ def _issue(store, cal, work) -> None:
     first), rendered with the final details; nothing is computed again."""
     services.set_progress(store, cal.id, "checking the sealed result")
     results = services.sealed_result(store, cal.id)
-    lab = write_lab_toml(services.lab_details(store, cal.id, final=True), work / "lab.toml")
+    details = services.lab_details(store, cal.id, final=True)
+    lab = write_lab_toml(details, work / "lab.toml")
     services.set_progress(store, cal.id, "rendering the certificate from the sealed result")
     render_folder(results, work / "out", spec_key=cal.spec_key, lab=lab)
     services.set_progress(store, cal.id, "storing the files")
-    services.store_issue(store, cal.id, work / "out")
+    services.store_issue(store, cal.id, work / "out",
+                         stated_standards=details.get("standards") or [])
 
 
 def _redraft(store, cal, work) -> None:

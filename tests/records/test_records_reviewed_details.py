@@ -157,6 +157,47 @@ def test_a_standard_edit_during_an_amendment_is_a_change(store, people, computed
     with pytest.raises(GonioError, match="changed the calibration during its amendment"):
         services.approve(store, tr, cal.id)
     assert services.approve(store, people["rev"], cal.id).status == "issuing"
+    # the amendment's own correction reaches its certificate
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "NIM-2026-9999" in page
+
+
+def test_a_standard_recalibrated_after_the_issue_is_stated_as_used(store, people,
+                                                                   computed_folder,
+                                                                   bench_readings,
+                                                                   monkeypatch):
+    """A standard recalibrated after the first issue (a new certificate and accuracy in the
+    register) is stated in an amendment as the replaced certificate stated it, as it was when
+    used; before, the amendment stated the register's new certificate for a measurement made
+    under the old one."""
+    from .test_records_services import new_calibration, run_worker, setup_instrument
+
+    services.set_settings(store, people["admin"], min_people="2")
+    inst, std = setup_instrument(store, people)
+    used_cert, used_acc = "TC-2025-0007", "0.2 arcsec, k 2"
+    services.update_standard(store, people["tech"], std.id, certificate=used_cert,
+                             accuracy=used_acc)
+    new_calibration(store, people, inst, std, bench_readings[0])
+    cal = run_worker(store, monkeypatch, computed_folder)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    first = run_issue(store, monkeypatch)
+    page = services.file_bytes(store, first.html_sha256).decode()
+    assert used_cert in page and used_acc in page
+    services.update_standard(store, people["tech"], std.id, certificate="RECAL-2027-0042",
+                             accuracy="0.05 arcsec, recalibrated")
+    services.amend(store, people["rev2"], first.id, "customer's address misprinted")
+    services.approve(store, people["rev"], cal.id)
+    amended = run_issue(store, monkeypatch)
+    page = services.file_bytes(store, amended.html_sha256).decode()
+    assert amended.replaces_id == first.id
+    assert used_cert in page and "RECAL-2027-0042" not in page, used_cert
+    assert "recalibrated" not in page and used_acc in page
+    # and an amendment of the amendment too (from its issue's record)
+    services.amend(store, people["rev2"], amended.id, "once more")
+    services.approve(store, people["rev"], cal.id)
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert used_cert in page and "RECAL-2027-0042" not in page
 
 
 def test_who_last_changed_and_reviewed_does_not_approve_alone(store, people, computed_folder,
