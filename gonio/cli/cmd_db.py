@@ -28,6 +28,7 @@ def register(sub) -> None:
                         "records' calendar dates and 'today' are its dates (default: this "
                         "machine's IANA zone, UTC where it cannot be determined; written once "
                         "into the store, which every process then reads)")
+    add_admin_option(q)
     q.set_defaults(func=run_init)
     q = dsub.add_parser("create-user", help="add a user (an administrator's login, --user; "
                                             "the new password from $GONIO_NEW_PASSWORD or "
@@ -542,8 +543,9 @@ def run_init(args) -> int:
         values = {k: getattr(args, k) for k in ("lab_name", "lab_address", "lab_accreditation",
                                                 "lab_contact", "timezone")
                   if getattr(args, k) is not None}
-        if values:
-            services.set_settings(store, None, **values)
+        if values:    # the laboratory's settings: an admin's, as on the settings page
+            services.set_settings(store, managing_admin(store, args.user, "db init"),
+                                  **values)
         print(f"records ready: {store.engine.url.render_as_string(hide_password=True)}")
     finally:
         store.close()
@@ -551,7 +553,8 @@ def run_init(args) -> int:
 
 
 def add_admin_option(q) -> None:
-    """``--user ADMIN`` of the commands that manage users (:func:`managing_admin`)."""
+    """``--user ADMIN`` of the commands that manage users or the laboratory's settings
+    (:func:`managing_admin`)."""
     q.add_argument("--user", default=None, metavar="ADMIN",
                    help="the active administrator doing it (default $GONIO_USER), with "
                         "their password in $GONIO_PASSWORD or asked; needed once the records "
@@ -559,12 +562,13 @@ def add_admin_option(q) -> None:
 
 
 def managing_admin(store, name: str | None, command: str):
-    """The administrator managing users on the command line: the records user ``name`` (else
-    ``$GONIO_USER``) logged in with their password (:func:`logged_in`) and holding the admin
-    role. With no name given this is None only while the records have no active
+    """The administrator managing users or settings on the command line: the records user
+    ``name`` (else ``$GONIO_USER``) logged in with their password (:func:`logged_in`) and
+    holding the admin role. With no name given this is None only while the records have no active
     administrator (setting up a new database: the first users, ``actor=None`` in the audit
     trail); once they have one, a GonioError (one line) asks for the login, so that an
-    account on the machine cannot create, promote or take over records users."""
+    account on the machine cannot create, promote or take over records users, nor change
+    the laboratory's name, accreditation or time zone."""
     from gonio.records import queries, services
 
     name = name or os.environ.get("GONIO_USER") or None

@@ -102,12 +102,20 @@ def test_users_cannot_be_managed_without_an_admin_login(tmp_path, monkeypatch, c
     monkeypatch.setenv("GONIO_USER", "tech")
     assert main(["db", "create-user", "mallory", "--data", data]) == 2
     assert "admin role" in capsys.readouterr().err
+    # the laboratory's settings too: its name and accreditation are an admin's
+    monkeypatch.delenv("GONIO_USER")
+    assert main(["db", "init", "--lab-accreditation", "CNAS L0000", "--data", data]) == 2
+    assert "active administrator" in capsys.readouterr().err
+    assert main(["db", "init", "--data", data]) == 0          # creating or upgrading: no login
+    assert main(["db", "init", "--lab-accreditation", "CNAS L1234", "--user", "boss",
+                 "--data", data]) == 0
     st = open_store(None, data)
     try:
         assert services.user(st, "mallory") is None
         assert services.user(st, "tech").roles == "technician" and services.user(
             st, "tech").active
         assert auth.authenticate(st, "boss", "long enough password").username == "boss"
+        assert services.settings(st)["lab_accreditation"] == "CNAS L1234"
     finally:
         st.close()
 
