@@ -87,7 +87,8 @@ def test_guarded_chi2_bound_beyond_its_acceptance_fails():
 
 
 def test_chi2_band_note_names_the_reach():
-    """The certificate's guard-band note states the U it used: bound − value."""
+    """The certificate's guard-band note states the δ (U's place in w = r·U) it used:
+    bound − value."""
     from gonio.report.i18n import labels
     from gonio.report.stated import interval_band_note
 
@@ -99,7 +100,7 @@ def test_chi2_band_note_names_the_reach():
     for lang in ("en", "zh"):
         note = interval_band_note([("arw", c.to_dict())], labels(lang), lambda k: "ARW",
                                   lambda k: "°/√h")
-        assert f"U = {st.interval[1]} − {st.value} °/√h = {reach.normalize()} °/√h" in note
+        assert f"δ = {st.interval[1]} − {st.value} °/√h = {reach.normalize()} °/√h" in note
         assert f"w = {(Decimal('1.5') * reach).normalize()} °/√h" in note
 
 

@@ -438,8 +438,8 @@ def test_a_guard_factor_below_one_is_refused(rule, r):
 
 @pytest.mark.parametrize("r", [1.0, 2.0])
 def test_the_guard_band_of_e_is_stated_with_the_intervals_reach(r):
-    """Under a guard band, the U of w = r·U for E is the half-width of its stated interval
-    [0.30, 0.55]: (0.55 − 0.30)/2 = 0.125, printed beside the decision rule in en and zh with
+    """Under a guard band, the δ of w = r·δ (U's place in w = r·U) for E is the half-width of
+    its stated interval [0.30, 0.55]: (0.55 − 0.30)/2 = 0.125, printed beside the decision rule in en and zh with
     w: never the draft's Annex A U (here 0.38, k = 2.13) that the certificate states beside
     E, and never the signed extreme (−0.45)."""
     from gonio.report.i18n import labels
@@ -454,7 +454,7 @@ def test_the_guard_band_of_e_is_stated_with_the_intervals_reach(r):
         note = interval_band_note([("angle_deviation", c.to_dict())], labels(lang),
                                   lambda k: "E", lambda k: "″")
         w = "0.125" if r == 1.0 else "0.25"
-        assert f"E: U = (0.55 − 0.30)/2 ″ = 0.125 ″, w = {w} ″" in note.replace(
+        assert f"E: δ = (0.55 − 0.30)/2 ″ = 0.125 ″, w = {w} ″" in note.replace(
             "E：", "E: ").replace("，", ", "), note
         assert "0.38" not in note and "−0.45" not in note.replace("− 0.45", "")
     # simple acceptance has no guard band: no note

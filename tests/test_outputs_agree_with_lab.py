@@ -281,8 +281,8 @@ def _declarations(root) -> dict:
 
 def test_conformity_is_declared_as_decided(issued):
     """Each decision's DCC declaration: the acceptance as the certificate states it, no
-    doubled "interval", no bare "—" probability; the guard band's U of every item decided on
-    its interval (half-width of the stated interval) in the DCC's own statement and on the
+    doubled "interval", no bare "—" probability; the guard band's δ of every item decided on
+    its interval (half-width of the stated interval, U's place in w = r·U) in the DCC's own statement and on the
     certificate, en and zh; summary.txt (rate family) both guard bands where two."""
 
     res = issued["res"]
@@ -308,14 +308,14 @@ def test_conformity_is_declared_as_decided(issued):
             if c.get("acceptance_of") == "interval" and c["rule"] != "simple":
                 lo_t, hi_t = c["stated_interval"]
                 if str(c.get("probability_model") or "").startswith("chi-square"):
-                    # a χ² bound: U is its reach above the stated estimate
+                    # a χ² bound: δ is its reach above the stated estimate
                     v_t = c["stated_value"]
                     assert c["U"] == pytest.approx(_number(hi_t) - _number(v_t), rel=1e-9)
-                    want = f"U = {hi_t} − {v_t}"
+                    want = f"δ = {hi_t} − {v_t}"
                 else:
                     assert c["U"] == pytest.approx((_number(hi_t) - _number(lo_t)) / 2,
                                                    rel=1e-9)
-                    want = f"U = ({hi_t} − {lo_t})/2"
+                    want = f"δ = ({hi_t} − {lo_t})/2"
                 assert band and all(want in b for b in band), (key, want, band)
                 assert want in html_lib.unescape(re.sub(r"<[^>]+>", "", html)), (key, want)
     if issued["spec"] in ("jjf1535-2015", "iec62047-20", "triad-alignment"):

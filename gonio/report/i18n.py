@@ -352,32 +352,35 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "按修约前的测得值判定（{items}）：该值超出接受限，而修约到所给位数的"
                               "打印值未超出；给出较严格的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
     "c_interval_band_note": {
-        "en": "Guard band of an item stated by its {p} % interval alone ({items}): U in w = r·U "
-              "is the half-width of that interval as stated, (upper end − lower end)/2 "
-              "(the interval is its centre ± U; not an uncertainty stated beside it), and w "
-              "is applied to the interval's ends: each end is moved in by (r − 1)·U, so at "
-              "r = 1 the interval lies within the limits; for a standard deviation stated by "
-              "its one-sided χ² bound U is the bound's reach above the estimate, upper end − "
-              "value (σ's χ² distribution about the estimate, whose probability of "
-              "conformance is given). Such an item is decided on the "
-              "interval as printed; an accepted one lies above its interval's upper end with "
-              "a probability of at most 1 − p = {q} % (the column “≤ {q} %”; a one-sided {p} % "
-              "bound reaches that, an item stated y ± U with k for {p} % has at most {h} % at "
-              "r = 1).",
-        "zh": "以 {p} % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为所给区间的半宽，"
-              "（上端 − 下端）/2（区间即 中点 ± U；不是其旁给出的不确定度）；w 施加于区间的端点："
-              "两端各向内移 (r − 1)·U，r = 1 时区间位于规定限之内；以单侧 χ² 上限表述的标准差，"
-              "U 为上限高出估计值的量，上端 − 值（σ 关于估计值的 χ² 分布，并给出其符合概率）。"
-              "此类项目按所印区间判定；"
-              "判为合格者其被测量高于区间上端的概率至多为 1 − p = {q} %（表中“≤ {q} %”；单侧 {p} % "
-              "上限可达此值，以 y ± U（{p} % 的 k）表述的项目在 r = 1 时至多 {h} %）。"},
-    "c_interval_band_item": {"en": "{name}: U = ({hi} − {lo})/2 {unit} = {U} {unit}, w = {w} "
+        "en": "Guard band of an item stated by its {p} % interval alone ({items}): such an item "
+              "is decided on its interval as printed, with w = r·δ, δ read off the printed "
+              "ends: the interval's half-width, (upper end − lower end)/2 (the interval is its "
+              "centre ± δ), or for a standard deviation stated by its one-sided χ² bound the "
+              "bound's reach above the estimate, upper end − value (σ's χ² distribution about "
+              "the estimate, whose probability of conformance is given). δ takes the place of "
+              "U in w = r·U; it is not an expanded uncertainty of the item, and where a U is "
+              "printed for the item δ can differ from it (even where the interval is the "
+              "item's value ± U: its printed ends are rounded outward). "
+              "w is applied to the interval's ends: each end is moved in by (r − 1)·δ, so at "
+              "r = 1 the interval lies within the limits. An accepted item lies above its "
+              "interval's upper end with a probability of at most 1 − p = {q} % (the column "
+              "“≤ {q} %”; a one-sided {p} % bound reaches that, an item stated y ± U with k "
+              "for {p} % has at most {hq} % at r = 1).",
+        "zh": "以 {p} % 区间单独表述的项目（{items}）的保护带：此类项目按所印区间判定，w = r·δ，"
+              "δ 取自所印端点：区间的半宽，（上端 − 下端）/2（区间即 中点 ± δ）；以单侧 χ² 上限"
+              "表述的标准差，δ 为上限高出估计值的量，上端 − 值（σ 关于估计值的 χ² 分布，并给出其"
+              "符合概率）。δ 代替 w = r·U 中的 U，不是该项目的扩展不确定度；该项目另给出 U 时，"
+              "δ 可能与之不同（区间即该项目的 值 ± U 时亦然：所印端点向外修约）。w 施加于区间的端点：两端各向内移 (r − 1)·δ，"
+              "r = 1 时区间位于规定限之内。判为合格者其被测量高于区间上端的概率至多为 "
+              "1 − p = {q} %（表中“≤ {q} %”；单侧 {p} % 上限可达此值，以 y ± U（{p} % 的 k）"
+              "表述的项目在 r = 1 时至多 {hq} %）。"},
+    "c_interval_band_item": {"en": "{name}: δ = ({hi} − {lo})/2 {unit} = {d} {unit}, w = {w} "
                                    "{unit}",
-                             "zh": "{name}：U = ({hi} − {lo})/2 {unit} = {U} {unit}，w = {w} "
+                             "zh": "{name}：δ = ({hi} − {lo})/2 {unit} = {d} {unit}，w = {w} "
                                    "{unit}"},
-    "c_interval_band_item_chi2": {"en": "{name}: U = {hi} − {v} {unit} = {U} {unit}, w = {w} "
+    "c_interval_band_item_chi2": {"en": "{name}: δ = {hi} − {v} {unit} = {d} {unit}, w = {w} "
                                         "{unit}",
-                                  "zh": "{name}：U = {hi} − {v} {unit} = {U} {unit}，w = {w} "
+                                  "zh": "{name}：δ = {hi} − {v} {unit} = {d} {unit}，w = {w} "
                                         "{unit}"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "pass": {"en": "pass", "zh": "合格"},

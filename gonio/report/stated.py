@@ -384,14 +384,17 @@ def stated_p(item) -> float | None:
 
 def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
     """The note under a decision rule with a guard band naming, for each item decided on its
-    95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the U of
-    its guard band w = r·U: the half-width of the interval as stated,
-    (upper end − lower end)/2, or for a standard deviation's χ² bound (``probability_model``
-    "chi-square…") the bound's reach above the stated estimate, upper end − value
-    (:func:`gonio.analysis.conformity.interval_guard_U`), printed
-    exactly from the stated ends the Result stores (``stated_interval``, ``U``), so that no
-    reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
-    it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
+    95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the
+    quantity δ of its guard band w = r·δ that takes U's place in w = r·U: the half-width of
+    the interval as stated, (upper end − lower end)/2, or for a standard deviation's χ² bound
+    (``probability_model`` "chi-square…") the bound's reach above the stated estimate,
+    upper end − value (:func:`gonio.analysis.conformity.interval_guard_U`, the decision's
+    ``U``), printed exactly from the stated ends the Result stores (``stated_interval``).
+    It is called δ, never U: the item's own expanded uncertainty, where its statement prints
+    one (a bound-condition U = a + k·u, an extreme's max|E_i| ± U), is another number
+    (the stated ends are rounded outward, so their half-width can exceed that U in its last
+    digit), and a note printing a second "U" for the same item would contradict the results
+    table. "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
     the unit as printed; ``p_of(key)``: the coverage probability item ``key`` states (the
     note names it, 1 − p and (1 − p)/2, where the items it lists state one p: one chosen
     95.45 %; else, or without ``p_of``, 95 %)."""
@@ -409,12 +412,12 @@ def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
                 and c.get("stated_value") is not None:
             # a standard deviation's χ² bound: U its reach above the estimate (interval_guard_U)
             v = c["stated_value"]
-            rows.append(L.get("c_interval_band_item_chi2", "{name}: U = {U} {unit}").format(
-                name=name_of(key), unit=unit_of(key), U=_half_text(v, hi, 1.0, 1), hi=hi,
+            rows.append(L.get("c_interval_band_item_chi2", "{name}: δ = {d} {unit}").format(
+                name=name_of(key), unit=unit_of(key), d=_half_text(v, hi, 1.0, 1), hi=hi,
                 v=v, w=_half_text(v, hi, r, 1)).replace("  ", " "))
             continue
-        rows.append(L.get("c_interval_band_item", "{name}: U = {U} {unit}").format(
-            name=name_of(key), unit=unit_of(key), U=_half_text(lo, hi), hi=hi, lo=lo,
+        rows.append(L.get("c_interval_band_item", "{name}: δ = {d} {unit}").format(
+            name=name_of(key), unit=unit_of(key), d=_half_text(lo, hi), hi=hi, lo=lo,
             w=_half_text(lo, hi, r)).replace("  ", " "))
     if not rows or "c_interval_band_note" not in L:
         return ""
@@ -423,7 +426,7 @@ def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
     p = float(p) if p else 0.95
     return L["c_interval_band_note"].format(items=sep.join(rows), p=p_text(p),
                                             q=bound_up_text(100.0 * (1.0 - p)),
-                                            h=bound_up_text(50.0 * (1.0 - p)))
+                                            hq=bound_up_text(50.0 * (1.0 - p)))
 
 
 def _half_text(lo: str, hi: str, r: float = 1.0, parts: int = 2) -> str:
