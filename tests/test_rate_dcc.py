@@ -84,12 +84,13 @@ def _as_display(text: str) -> str:
 
 
 def _shown(doc: bytes):
-    """(src, rule, factor, si:real element) of every stated item value."""
+    """(src, rule, factor, si:real element) of every stated item value (a χ² interval's ν
+    beside it, ``uncertainty.nu_eff``: tests/test_chi2_nu_dcc.py)."""
     root = etree.fromstring(doc)
     out = []
     for c in root.iter(etree.Comment):
         m = re.match(r" src=(items\.\S+) rule=(\S+)(?: factor=(\S+))? ", c.text)
-        if m:
+        if m and not m.group(1).endswith(".uncertainty.nu_eff"):
             out.append((m.group(1), m.group(2), float(m.group(3) or 1.0), c.getnext()))
     return out
 

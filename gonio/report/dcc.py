@@ -7,7 +7,8 @@ Contents
 :func:`unit_dsi`           results.json unit → D-SI unit string (the one unit table)
 :func:`dsi_decimal`        a displayed number ("4.36×10⁻⁵", "±0.15") → an si:decimal ("4.36e-5")
 :func:`element`, :func:`text_element`, :func:`real`, :func:`quantity`, :func:`list_quantity`,
-:func:`not_measured_quantity`  the shared builders (also used by :mod:`gonio.report.rate_dcc`)
+:func:`not_measured_quantity`, :func:`nu_quantity`  the shared builders (also used by
+                           :mod:`gonio.report.rate_dcc`)
 :func:`new_document`, :func:`administrative_data`, :func:`measurement_result`,
 :func:`influence_conditions`, :func:`tree_bytes`  the shared document parts
 :func:`conformity_statements`, :func:`bilingual`,
@@ -31,8 +32,10 @@ measurementResults
     the method (clauses, with the method statement's settings), the standards used
     (measuring equipment), the influence conditions (temperature, humidity), and one
     result per item: its value, D-SI unit and, where the item has one, the expanded
-    uncertainty with coverage factor and coverage probability; E as ± max|E_i| with
-    the signed extreme and its position; the per-point tables as lists.
+    uncertainty with coverage factor and coverage probability, or its coverage interval
+    (an item stated by its χ² interval with the ν that interval was computed with, in a
+    quantity of its own: :func:`nu_quantity`); E as ± max|E_i| with the signed extreme
+    and its position; the per-point tables as lists.
 
 Every number is the one the printed certificate shows (:mod:`gonio.report.stated`,
 the GUM 7.2.6 rounding), written in the si:decimal form. The virtual bench's DCC is
@@ -242,6 +245,24 @@ def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str,
     element(rl, "si:labelXMLList", "intervalMin intervalMax")
     element(rl, "si:valueXMLList", " ".join(dsi_decimal(str(e)) for e in ends))
     element(rl, "si:unitXMLList", f"{dsi} {dsi}")
+
+
+#: What an item's degrees-of-freedom quantity is, in the DCC's words (:func:`nu_quantity`)
+CHI2_NU = "degrees of freedom ν its chi-square interval was computed with"
+
+
+def nu_quantity(d, name: str, nu: Num | None) -> None:
+    """The ν of an item stated by a χ² interval (a standard deviation's, a dispersion's
+    bound-condition limit), as its certificate prints it beside that interval: a dcc:quantity
+    after the item's own (refType ``gonio_degreesOfFreedom``, :data:`CHI2_NU` in its name)
+    holding ν as an si:real in the unit one, its path in results.json and its rule
+    ("nuchi2") in the comment before it, as every stated number. si:coverageIntervalMU and
+    the ends' list have no place for it, and without it the interval's upper end cannot be
+    computed again (s·√(ν/χ²_{1−p}(ν))). ``nu``: :func:`gonio.report.stated.item_nums`'s
+    ``chi2_nu``; None writes nothing."""
+    if nu is None:
+        return
+    quantity(d, f"{name}: {CHI2_NU}", nu, "one", ref_type="gonio_degreesOfFreedom")
 
 
 def stated_p(p) -> str:

@@ -809,6 +809,9 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
      "{1}：界限条件区间，" + _MAX_ABS_BOUND_INTERVAL_ZH + "；p = {2} %"),
     (rf"(.+): {_BOUND_CHI2_INTERVAL_RE}; p = (\S+) %",
      "{1}：单侧界限条件上限，" + _BOUND_CHI2_INTERVAL_ZH + "；p = {2} %"),
+    # the ν of an item stated by a χ² interval (gonio.report.dcc.CHI2_NU, nu_quantity)
+    (r"(.+): degrees of freedom ν its chi-square interval was computed with",
+     "{1}：其 χ² 区间计算所用的自由度 ν"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     # the parts of a per-item DCC's method after the specification's title ("<title>;
     # protocol …; readings <file> (SHA-256 …, n rows)": its bracket and each part translated

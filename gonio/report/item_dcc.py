@@ -32,7 +32,7 @@ from gonio.report.dcc import (BOUND_INTERVAL, administrative_data, below_zero_qu
                               conformity_statements,
                               interval_quantity, stated_p,
                               element, environment_conditions, influence_conditions,
-                              measurement_result, new_document, not_measured_quantity,
+                              measurement_result, new_document, not_measured_quantity, nu_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
 from gonio.report.stated import item_nums, u_c_certified
@@ -139,6 +139,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
                  **kw)
         if bound is not None:
             interval_quantity(d, name, bound, dsi, float(p), bound_interval_text(it))
+        nu_quantity(d, name, n["chi2_nu"])              # a χ² interval's ν, as printed
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -26,7 +26,9 @@ measurementResults
     one dcc:result per item in the certificate's groups (JJF 1535 Annex B; IEC 62047-20
     clause 5): a dcc:quantity whose name carries the clause and whose ``refType`` names it
     (:func:`clause_ref_type`), with the value, the D-SI unit and the expanded uncertainty
-    (U, k, p); an item not measured is a dcc:noQuantity with its reason.
+    (U, k, p), or its coverage interval (an item stated by a χ² interval with that
+    interval's ν beside it, :func:`gonio.report.dcc.nu_quantity`); an item not measured is
+    a dcc:noQuantity with its reason.
 
 Numbers are the ones the certificate prints (value 4 significant digits, U 2, k 3;
 :func:`gonio.report.i18n.display`); an XML comment before each si:real records its path
@@ -49,7 +51,8 @@ from gonio.report.dcc import (administrative_data, below_zero_quantity, bound_in
                               conformity_statements,
                               element, environment_conditions, influence_conditions,
                               interval_quantity, measurement_result, new_document,
-                              not_measured_quantity, quantity, text_element, tree_bytes)
+                              not_measured_quantity, nu_quantity, quantity, text_element,
+                              tree_bytes)
 from gonio.report.i18n import display, labels
 from gonio.report.rate_content import item_conditions, rate_standards, spec_content
 from gonio.report.stated import item_nums, u_c_certified
@@ -212,6 +215,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if bound is not None:
                 interval_quantity(data, name, bound, dsi, float(item_p(it)),
                                   bound_interval_text(it))
+            nu_quantity(data, name, n["chi2_nu"])    # a χ² interval's ν, as printed
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

@@ -518,12 +518,22 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     writes: ``value``, or for a non-negative quantity whose estimate fell below zero
     (``statement.below_zero``, stated by its upper bound alone) that bound, as every output
     prints it — never the negative estimate the statement leaves out.
+    ``chi2_nu``: for an item stated by a χ² interval (a standard deviation's, or a
+    dispersion's bound-condition limit: :func:`~gonio.result.statement.chi2_stated_nu`) the
+    ν that interval was computed with (``nu`` itself, rule "nuchi2"), else None: every output
+    that states such an item prints it beside the interval (the certificate's ν column,
+    summary.txt, the DCC, the records' pages).
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
     ...     {"U": 159.4, "k": 2.38068, "nu_eff": 6.2, "p": 0.95}}, "items.bias")
     >>> str(n["value"]), n["value"].rule, str(n["U"]), str(n["k"]), str(n["nu"]), n["p"]
     ('790', 'dec-1', '160', '2.38', '6', '95')
+    >>> n = item_nums({"value": 0.2288, "unit": "°/h", "measured": True, "nonnegative": True,
+    ...     "uncertainty": {"k": None, "nu_eff": 94.7, "coverage_probability": 0.95,
+    ...                     "k_source": "chi-square", "interval": [0.0, 0.2721]}}, "items.B_s")
+    >>> str(n["chi2_nu"]), n["chi2_nu"].src, n["chi2_nu"].rule, n["U"]
+    ('94', 'items.B_s.uncertainty.nu_eff', 'nuchi2', None)
     """
     from gonio.result.statement import item_statement
 
@@ -540,7 +550,7 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     st = item_statement(it, sig=sig)
     u_c = (it.get("uncertainty") or {}).get("u_c")
     out = {"statement": st, "value": None, "stated_value": None, "U": None, "k": None,
-           "nu": None, "p": st.p, "upper": st.upper, "interval": None}
+           "nu": None, "chi2_nu": None, "p": st.p, "upper": st.upper, "interval": None}
     if st.interval is not None:     # the DCC's coverage interval: ends and u (2 digits)
         out["interval"] = {"ends": st.interval_ends,
                            "u": None if not u_c else display_uncertainty(float(u_c))}
@@ -565,4 +575,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         # a χ² interval's ν: the one it was computed with, never ∞ (display rule "nuchi2")
         chi2 = chi2_stated_nu((it.get("uncertainty") or {}).get("k_source"))
         out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nuchi2" if chi2 else "nu")
+        if chi2 and st.interval is not None:
+            out["chi2_nu"] = out["nu"]
     return out

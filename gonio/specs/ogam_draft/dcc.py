@@ -11,7 +11,9 @@ Contents
 =========================  ==============================================================
 
 Besides what every DCC holds (:mod:`gonio.report.dcc`), E is stated as ± max|E_i| with the
-signed extreme and its position, and each item's per-point table as dcc:list columns. Every
+signed extreme and its position, B_s and R by their χ² interval with the ν it was computed
+with (:func:`~gonio.kit.render.nu_quantity`), and each item's per-point table as dcc:list
+columns. Every
 number is the one the printed certificate shows (:mod:`gonio.specs.ogam_draft.stated`).
 """
 
@@ -26,8 +28,8 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data, below_ze
                               environment_conditions, influence_conditions, interval_quantity,
                               labels, list_quantity,
                               measurement_result, new_document,
-                              not_measured_quantity, num, quantity, text_element, tree_bytes,
-                              unit_dsi)
+                              not_measured_quantity, nu_quantity, num, quantity, text_element,
+                              tree_bytes, unit_dsi)
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (band_note, combined_k_note, conformity_for, e_budget,
                                            e_u_c_certified,
@@ -166,8 +168,17 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 desc.append(combined_k_note(res, L, only=name))
             quantity(data, L[name], s["value"], item["unit"],
                      description="; ".join(d for d in desc if d) or None, **kw)
-        _detail_lists(data, res, name)
+        _beside(data, res, name, s, L)
     return root
+
+
+def _beside(data, res: dict, name: str, s: dict, L: dict) -> None:
+    """What follows item ``name``'s quantity (``s``: its :func:`stated_item`): the ν of its χ²
+    interval (B_s, R), as the certificate prints it beside that interval
+    (:func:`~gonio.kit.render.nu_quantity`: none for an item stated otherwise), then its
+    per-point lists (:func:`_detail_lists`)."""
+    nu_quantity(data, L[name], (s["interval"] or {}).get("chi2_nu"))
+    _detail_lists(data, res, name)
 
 
 #: What E's interval is where each point's U carries the table's bound (its DCC quantity's
