@@ -12,7 +12,7 @@ from sqlalchemy.orm import joinedload, selectinload
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
                                   Certificate, Customer, Instrument, ResultItem, Standard,
                                   TableCalibration, User)
-from gonio.records.results import conformity_of, statements_of, stored_result
+from gonio.records.results import conformity_of, items_of, statements_of, stored_result
 
 
 def _page(s, stmt, page: int, size: int):
@@ -112,11 +112,13 @@ def result_texts(doc, lang: str, stated: dict | None = None) -> dict:
     (:func:`gonio.report.i18n.labels`), ``titles`` each item's name as the certificate in
     ``lang`` names it (the specification's ``item_titles``, else the stored title),
     ``shown`` each statement's one line (:meth:`gonio.result.statement.Statement.text` in
-    ``lang``, each negative number with U+2212)."""
+    ``lang``, each negative number with U+2212; an item stated by a χ² interval with the ν
+    that interval was computed with, :func:`statement_line`)."""
     from gonio.report.i18n import labels, minus_sign
     from gonio.specs import get
 
     stated = statements_of(doc) if stated is None else stated
+    items = items_of(doc)
     titles = {}
     if isinstance(doc, dict) and isinstance(doc.get("items"), dict):
         try:
@@ -126,7 +128,39 @@ def result_texts(doc, lang: str, stated: dict | None = None) -> dict:
         titles = hook(doc, lang) if hook else {
             k: it.get("title", k) for k, it in doc["items"].items()}
     return {"lang": lang, "L": labels(lang), "titles": titles,
-            "shown": {k: minus_sign(st.text(lang)) for k, st in stated.items()}}
+            "shown": {k: minus_sign(statement_line(st, items.get(k), k, lang))
+                      for k, st in stated.items()}}
+
+
+def statement_line(st, item: dict | None, key: str, lang: str = "en") -> str:
+    """An item's statement ``st`` on one line as the records' pages print it: its text in
+    ``lang``, and for an item stated by a χ² interval (a standard deviation's, a
+    dispersion's bound-condition limit) the ν that interval was computed with, as the
+    certificate's ν column and summary.txt print it ("; ν = 94"): the one rule's
+    (:func:`gonio.report.stated.item_nums`, ``chi2_nu``), never computed here.
+
+    >>> from gonio.result.statement import item_statement
+    >>> it = {"value": 0.2288, "unit": "°/h", "measured": True, "nonnegative": True,
+    ...       "uncertainty": {"k": None, "nu_eff": 94.7, "coverage_probability": 0.95,
+    ...                       "k_source": "chi-square", "interval": [0.0, 0.2721]}}
+    >>> statement_line(item_statement(it), it, "B_s")
+    '0.229 °/h; upper bound: ≤ 0.273 °/h (interval [0, 0.273], p = 95 %); ν = 94'
+    >>> statement_line(item_statement(it), it, "B_s", "zh")[-9:]
+    '%）；ν = 94'
+    """
+    text = st.text(lang)
+    if not isinstance(item, dict) or st.interval is None:
+        return text
+    from gonio.errors import GonioError
+    from gonio.report.stated import item_nums
+
+    try:
+        nu = item_nums(item, f"items.{key}")["chi2_nu"]
+    except (GonioError, TypeError, ValueError):
+        return text
+    if nu is None:
+        return text
+    return f"{text}{'；' if lang == 'zh' else '; '}ν = {nu}"
 
 
 def calibration_page(store, cal_id: int, lang: str = "en") -> dict | None:

@@ -87,11 +87,11 @@ def stated_items(store, results_sha256: str) -> dict:
     return statements_of(stored_result(store, results_sha256))
 
 
-def statements_of(doc) -> dict:
-    """:func:`stated_items` of a results.json already read (a dict; anything else: none)."""
-    from gonio.errors import GonioError
-    from gonio.result.statement import item_statement
-
+def items_of(doc) -> dict:
+    """Item key → its results.json dict as :func:`statements_of` states it, whatever the
+    stored result's shape (a dict of items, a list of them, the optical draft's older one
+    item per key; a list's U and k beside the value as its uncertainty); none for anything
+    else."""
     items = doc.get("items") if isinstance(doc, dict) else None
     if isinstance(items, list):
         items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
@@ -104,6 +104,17 @@ def statements_of(doc) -> dict:
             continue
         if "uncertainty" not in it:          # the unified list's U and k beside the value
             it = dict(it, uncertainty={"U": it.get("U"), "k": it.get("k")})
+        out[key] = it
+    return out
+
+
+def statements_of(doc) -> dict:
+    """:func:`stated_items` of a results.json already read (a dict; anything else: none)."""
+    from gonio.errors import GonioError
+    from gonio.result.statement import item_statement
+
+    out = {}
+    for key, it in items_of(doc).items():
         try:
             out[key] = item_statement(it)
         except (GonioError, TypeError, ValueError):

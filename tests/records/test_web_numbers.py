@@ -172,6 +172,57 @@ def test_the_chinese_page_states_the_same_numbers(recorded, tmp_path):
         assert html_module.escape(title, quote=False) in named or title in named, (key, title)
 
 
+def test_web_states_the_nu_of_each_chi2_interval(recorded):
+    """An item stated by a χ² interval (the optical draft's B_s and R, a rate specification's
+    bias stability, K_r, B_r, ARW, a noise item's limit) is stated on the calibration page, in
+    English and Chinese, with the ν that interval was computed with: the certificate's ν
+    (its number span), summary.txt's, the integer part of results.json's ν_eff, and the
+    interval's upper end computed again from it (JCGM 100 E.4.3) is results.json's, within
+    the page's printed end; an item stated otherwise prints no "ν =" of its own."""
+    import math
+
+    from scipy.stats import chi2
+
+    from gonio.report.dcc import dsi_decimal
+    from gonio.result.statement import K_SOURCE_CHI2, chi2_nu, chi2_stated_nu
+
+    web, cid, res = recorded["web"], recorded["id"], recorded["res"]
+    spans = certificate_spans((recorded["dir"] / "certificate.html").read_text(encoding="utf-8"))
+    summary = (recorded["dir"] / "summary.txt").read_text(encoding="utf-8")
+    en = page_rows(web.get(f"/calibrations/{cid}").text)
+    zh = page_rows(web.get(f"/calibrations/{cid}?lang=zh").text)
+    seen = set()
+    for key, it in res["items"].items():
+        unc = it.get("uncertainty") or {}
+        if not it.get("measured") or key not in en:
+            continue
+        if unc.get("interval") is None or unc.get("k") is not None \
+                or not chi2_stated_nu(unc.get("k_source")):
+            assert "ν =" not in en[key][0], (key, en[key])
+            continue
+        nu = f"{chi2_nu(unc['nu_eff']):g}"
+        assert nu == str(math.floor(unc["nu_eff"])), key
+        assert en[key][0].endswith(f"; ν = {nu}"), (key, en[key])
+        assert zh[key][0].endswith(f"；ν = {nu}"), (key, zh[key])
+        if (key, "uncertainty.nu_eff") in spans:            # the certificate's ν column
+            assert spans[(key, "uncertainty.nu_eff")] == {nu}, (key, spans[
+                (key, "uncertainty.nu_eff")])
+        assert f"ν = {nu}" in summary or f"ν_eff = {nu})" in summary, key
+        seen.add(key)
+        if unc["k_source"] != K_SOURCE_CHI2:
+            continue                  # a bound-condition limit: s + a + R, not s alone
+        p = unc.get("coverage_probability") or 0.95
+        upper = it["value"] * math.sqrt(float(nu) / chi2.ppf(1 - p, float(nu)))
+        assert upper == pytest.approx(unc["interval"][1], rel=1e-6), key
+        printed = cell_numbers(en[key][0])
+        hi = printed.get("upper") or printed["interval"][1]
+        assert float(dsi_decimal(hi.replace("\u2212", "-"))) >= upper * (1 - 1e-12), \
+            (key, hi, upper)
+    must = {"ogam-draft": {"zero_stability", "repeatability"},
+            "jjf1535-2015": {"bias_stability"}}.get(recorded["spec"], set())
+    assert must <= seen, (recorded["spec"], sorted(seen))
+
+
 def test_results_json_served_is_the_stored_result(recorded):
     r = recorded["web"].get(f"/calibrations/{recorded['id']}/files/results.json")
     assert r.status_code == 200
