@@ -366,19 +366,13 @@ def c_outcome(c):
     return c.get("outcome") if isinstance(c, dict) else getattr(c, "outcome", None)
 
 
-def stated_p(item) -> float | None:
-    """The coverage probability a results.json item (a dict, or an Item) states, None where it
-    states none.
+def stated_p(item: dict) -> float | None:
+    """The coverage probability a results.json item states, None where it states none.
 
     >>> stated_p({"uncertainty": {"coverage_probability": 0.9545}}), stated_p({})
     (0.9545, None)
     """
-    unc = item.get("uncertainty") if isinstance(item, dict) else getattr(item, "uncertainty",
-                                                                          None)
-    if unc is None:
-        return None
-    p = unc.get("coverage_probability") if isinstance(unc, dict) else getattr(
-        unc, "coverage_probability", None)
+    p = (item.get("uncertainty") or {}).get("coverage_probability")
     return None if p is None else float(p)
 
 
@@ -422,8 +416,7 @@ def interval_band_note(decided, L: dict, name_of, unit_of, p_of=None) -> str:
     if not rows or "c_interval_band_note" not in L:
         return ""
     sep = "；" if L["c_interval_band_note"].startswith("以") else "; "
-    p = ps.pop() if len(ps) == 1 else None
-    p = float(p) if p else 0.95
+    p = (ps.pop() if len(ps) == 1 else None) or 0.95
     return L["c_interval_band_note"].format(items=sep.join(rows), p=p_text(p),
                                             q=bound_up_text(100.0 * (1.0 - p)),
                                             hq=bound_up_text(50.0 * (1.0 - p)))
