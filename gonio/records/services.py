@@ -2390,10 +2390,9 @@ def last_changer(s: Session, cal_id: int) -> int | None:
 def amendment_changers(s: Session, cal_id: int) -> set[int]:
     """The users who changed a calibration (its ``attach`` audit events: standards,
     environment) since its latest amendment was asked for (its latest ``amend`` event), and
-    those who changed one of its standards' details since (an ``update`` of the standard:
-    it reaches the amended certificate where the amendment attaches the standards again,
-    :func:`lab_details`; counted in any case, so that an editor of what the amendment may
-    state does not approve it)."""
+    those who changed one of its standards' details since (an ``update`` of the standard),
+    or corrected one since the certificate it replaces was issued (a correction reaches the
+    amendment, :func:`amended_standards`)."""
     asked = s.scalar(select(func.max(AuditEvent.id)).where(
         AuditEvent.action == "amend", AuditEvent.entity == "calibration",
         AuditEvent.entity_id == str(int(cal_id))))
@@ -2410,6 +2409,11 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
             AuditEvent.action == "update", AuditEvent.entity == "standard",
             AuditEvent.entity_id.in_(used), AuditEvent.id > asked,
             AuditEvent.user_id.is_not(None))))
+        cal = s.get(Calibration, int(cal_id))
+        if cal is not None and cal.pending_replaces_id:   # corrections it states, made earlier
+            since = _event_id(s, "issue", "certificate", cal.pending_replaces_id) or asked
+            changed |= {uid for _e, uid, _s, _f in standard_corrections(s, used, since)
+                        if uid is not None}
     return changed
 
 
@@ -2911,7 +2915,7 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
             if final and not cal.pending_replaces_id:   # a first issue: the details reviewed
                 lab.update(_with_reviewed(lab, basis))
-            elif final and not standards_attached_in_amendment(s, cal.id):
+            elif final:
                 lab["standards"] = amended_standards(s, cal, stds, lab["standards"], basis)
         elif cal.lab_sha256 and (own := lab_file(store, cal.lab_sha256, cal.lab_name,
                                                  cal.spec_key)).get("specification_limits"):
@@ -2950,47 +2954,91 @@ def reviewed_part(lab: dict) -> dict:
     return part
 
 
+#: The fields of a standard's register entry that a certificate states.
+STANDARD_STATED = ("name", "identifier", "accuracy", "certificate", "traceability")
+#: The fields whose change in an edit records the standard's recalibration.
+STANDARD_RECALIBRATED = ("calibrated_on", "due_on")
+
+
+def standard_corrections(s: Session, standard_ids, since: int, until: int | None = None
+                         ) -> list[tuple[int, int | None, str, dict]]:
+    """The corrections of standards' register entries in the audit trail between the events
+    ``since`` and ``until`` (exclusive, inclusive; None: to now): (event id, user id, the
+    standard's id, {stated field: value after}) for each ``update`` event that changed a
+    field a certificate states (:data:`STANDARD_STATED`) without recording a recalibration
+    (it changes none of :data:`STANDARD_RECALIBRATED`: an edit that records a new
+    calibration date or due date is a recalibration, never a correction), oldest first."""
+    ids = [str(int(i)) for i in standard_ids]
+    if not ids:
+        return []
+    stmt = select(AuditEvent.id, AuditEvent.user_id, AuditEvent.entity_id,
+                  AuditEvent.before_json, AuditEvent.after_json).where(
+        AuditEvent.action == "update", AuditEvent.entity == "standard",
+        AuditEvent.entity_id.in_(ids), AuditEvent.id > int(since))
+    if until is not None:
+        stmt = stmt.where(AuditEvent.id <= int(until))
+    out = []
+    for eid, uid, sid, before, after in s.execute(stmt.order_by(AuditEvent.id)):
+        try:
+            b, a = json.loads(before or "{}"), json.loads(after or "{}")
+        except ValueError:
+            continue
+        if any(b.get(k) != a.get(k) for k in STANDARD_RECALIBRATED):
+            continue
+        fields = {k: a.get(k) for k in STANDARD_STATED if b.get(k) != a.get(k)}
+        if fields:
+            out.append((eid, uid, sid, fields))
+    return out
+
+
+def _event_id(s: Session, action: str, entity: str, entity_id, first: bool = False
+              ) -> int | None:
+    """The id of the latest (``first``: the earliest) audit event ``action`` on a record."""
+    col = func.min(AuditEvent.id) if first else func.max(AuditEvent.id)
+    return s.scalar(select(col).where(AuditEvent.action == action, AuditEvent.entity == entity,
+                                      AuditEvent.entity_id == str(int(entity_id))))
+
+
+def _replaced_statement(s: Session, cal: Calibration, drafted: dict) -> tuple[list, int]:
+    """(the standards the certificate an amendment replaces stated, the id of the audit event
+    from which register corrections reach the amendment): that certificate's own statement
+    and issue event (:func:`stated_standards`); for one issued before statements were kept,
+    the calibration's first certificate's — its reviewed draft's standards — and that first
+    issue's event."""
+    kept = stated_standards(s, cal.pending_replaces_id)
+    if kept is not None:
+        return kept, _event_id(s, "issue", "certificate", cal.pending_replaces_id) or 0
+    first = s.scalar(select(func.min(Certificate.id)).where(
+        Certificate.calibration_id == cal.id))
+    since = _event_id(s, "issue", "certificate", first) if first is not None else None
+    return reviewed_part(drafted)["standards"] or [], since or 0
+
+
 def amended_standards(s: Session, cal: Calibration, stds: list, live: list,
                       drafted: dict) -> list:
     """The standards an amendment of ``cal`` states (``stds`` the standards it names, ``live``
-    their register entries now, in that order; ``drafted`` its reviewed draft's details):
-    each as the certificate it replaces stated it (as it was when used: a recalibration
-    recorded in the register since does not reach the amendment), except one whose register
-    entry was edited since the amendment was asked for — the amendment's own correction,
-    which counts as a change of it (:func:`amendment_changers`) — which is stated as the
-    register holds it now. The replaced certificate's statement is its issue's audit event's
-    (:func:`stated_standards`); for a first certificate issued before those were kept, the
-    reviewed draft's (which it stated); a standard found in neither is stated as the register
-    holds it."""
-    asked = s.scalar(select(func.max(AuditEvent.id)).where(
-        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
-        AuditEvent.entity_id == str(cal.id)))
-    edited = set(s.scalars(select(AuditEvent.entity_id).where(
-        AuditEvent.action == "update", AuditEvent.entity == "standard",
-        AuditEvent.id > (asked or 0)))) if asked is not None else set()
-    kept = stated_standards(s, cal.pending_replaces_id)
-    if kept is None and _first_certificate(s, cal.pending_replaces_id):
-        kept = reviewed_part(drafted)["standards"] or []
-    by_id = {str(e.get("identifier")): e for e in (kept or []) if isinstance(e, dict)}
-    return [entry if str(st.id) in edited or st.identifier not in by_id
-            else by_id[st.identifier] for st, entry in zip(stds, live)]
+    their register entries now, in that order; ``drafted`` its reviewed draft's details).
 
-
-def standards_attached_in_amendment(s: Session, cal_id: int) -> bool:
-    """Whether an ``attach`` since the calibration's latest amendment was asked for changed
-    which standards it names (their identifiers before and after the attach differ)."""
-    asked = s.scalar(select(func.max(AuditEvent.id)).where(
-        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
-        AuditEvent.entity_id == str(int(cal_id))))
-    if asked is None:
-        return False
-    for before, after in s.execute(select(AuditEvent.before_json, AuditEvent.after_json).where(
-            AuditEvent.action == "attach", AuditEvent.entity == "calibration",
-            AuditEvent.entity_id == str(int(cal_id)), AuditEvent.id > asked)):
-        b, a = json.loads(before or "{}"), json.loads(after or "{}")
-        if b.get("standards") != a.get("standards"):
-            return True
-    return False
+    Each standard the replaced certificate stated is stated as it stated it — as it was when
+    used: a recalibration recorded in the register since does not reach the amendment — with
+    the corrections of its register entry made since that certificate's issue and up to the
+    amendment's approval applied field by field (:func:`standard_corrections`: a misread
+    certificate number corrected, before the amendment is asked for or during it). An edit
+    after the approval reaches nothing (what is issued is what was approved). A standard the
+    replaced certificate did not state (attached during the amendment) is stated as the
+    register holds it. The replaced certificate's statement: :func:`_replaced_statement`."""
+    base, since = _replaced_statement(s, cal, drafted)
+    until = _event_id(s, "approve", "calibration", cal.id)
+    by_ident = {str(e.get("identifier")): dict(e) for e in base if isinstance(e, dict)}
+    fixes: dict[str, dict] = {}
+    for _eid, _uid, sid, fields in standard_corrections(s, [st.id for st in stds], since,
+                                                       until):
+        fixes.setdefault(sid, {}).update(fields)
+    out = []
+    for st, entry in zip(stds, live):
+        stated = by_ident.get(st.identifier)
+        out.append(entry if stated is None else dict(stated, **fixes.get(str(st.id), {})))
+    return out
 
 
 def stated_standards(s: Session, cert_id: int) -> list | None:
@@ -3002,13 +3050,6 @@ def stated_standards(s: Session, cert_id: int) -> list | None:
         AuditEvent.entity_id == str(int(cert_id))).order_by(AuditEvent.id.desc()).limit(1))
     got = json.loads(after or "{}").get("stated_standards")
     return got if isinstance(got, list) else None
-
-
-def _first_certificate(s: Session, cert_id: int) -> bool:
-    """Whether a certificate is its calibration's first issue (it replaces none): it stated
-    the standards of the reviewed draft."""
-    cert = s.get(Certificate, int(cert_id))
-    return cert is not None and cert.replaces_id is None
 
 
 def _with_reviewed(lab: dict, drafted: dict) -> dict:

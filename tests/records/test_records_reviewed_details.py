@@ -162,6 +162,45 @@ def test_a_standard_edit_during_an_amendment_is_a_change(store, people, computed
     assert "NIM-2026-9999" in page
 
 
+USED, USED_ACC, RECAL = "TC-2025-0007", "0.2 arcsec, k 2", "RECAL-2027-0042"
+
+
+def issued_under(store, people, computed_folder, bench_readings, monkeypatch,
+                 certificate=USED):
+    """A two-person laboratory's calibration made with RT-07 under its certificate
+    ``certificate`` (accuracy USED_ACC), issued: (the calibration, RT-07, the certificate)."""
+    from .test_records_services import new_calibration, run_worker, setup_instrument
+
+    services.set_settings(store, people["admin"], min_people="2")
+    inst, std = setup_instrument(store, people)
+    services.update_standard(store, people["tech"], std.id, certificate=certificate,
+                             accuracy=USED_ACC)
+    new_calibration(store, people, inst, std, bench_readings[0])
+    cal = run_worker(store, monkeypatch, computed_folder)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    first = run_issue(store, monkeypatch)
+    page = services.file_bytes(store, first.html_sha256).decode()
+    assert certificate in page and USED_ACC in page
+    return cal, std, first
+
+
+def recalibrate(store, people, std) -> None:
+    """RT-07's recalibration recorded as the register's form records it: a new certificate
+    and accuracy with the new calibration and due dates, in one edit."""
+    import datetime as dt
+
+    today = services.records_today(store)
+    services.update_standard(store, people["tech"], std.id, certificate=RECAL,
+                             accuracy="0.05 arcsec, recalibrated", calibrated_on=today,
+                             due_on=today + dt.timedelta(days=365))
+
+
+def amended_page(store, people, cal, monkeypatch) -> str:
+    services.approve(store, people["rev"], cal.id)
+    return services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+
+
 def test_a_standard_recalibrated_after_the_issue_is_stated_as_used(store, people,
                                                                    computed_folder,
                                                                    bench_readings,
@@ -169,35 +208,92 @@ def test_a_standard_recalibrated_after_the_issue_is_stated_as_used(store, people
     """A standard recalibrated after the first issue (a new certificate and accuracy in the
     register) is stated in an amendment as the replaced certificate stated it, as it was when
     used; before, the amendment stated the register's new certificate for a measurement made
-    under the old one."""
-    from .test_records_services import new_calibration, run_worker, setup_instrument
+    under the old one. An unrelated correction during the amendment (its traceability) reaches
+    it field by field, without the recalibration."""
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    recalibrate(store, people, std)
+    services.amend(store, people["rev2"], first.id, "customer's address misprinted")
+    services.update_standard(store, people["admin"], std.id, traceability="NIM (typo fixed)")
+    page = amended_page(store, people, cal, monkeypatch)
+    assert USED in page and RECAL not in page
+    assert "recalibrated" not in page and USED_ACC in page and "NIM (typo fixed)" in page
+    # and an amendment of the amendment too (from its issue's record)
+    amended = services.amend(store, people["rev2"], cal_certificate(store, cal), "once more")
+    page = amended_page(store, people, amended, monkeypatch)
+    assert USED in page and RECAL not in page and "NIM (typo fixed)" in page
 
-    services.set_settings(store, people["admin"], min_people="2")
-    inst, std = setup_instrument(store, people)
-    used_cert, used_acc = "TC-2025-0007", "0.2 arcsec, k 2"
-    services.update_standard(store, people["tech"], std.id, certificate=used_cert,
-                             accuracy=used_acc)
-    new_calibration(store, people, inst, std, bench_readings[0])
-    cal = run_worker(store, monkeypatch, computed_folder)
-    services.review(store, people["rev"], cal.id, accept=True)
-    services.approve(store, people["rev"], cal.id)
-    first = run_issue(store, monkeypatch)
-    page = services.file_bytes(store, first.html_sha256).decode()
-    assert used_cert in page and used_acc in page
-    services.update_standard(store, people["tech"], std.id, certificate="RECAL-2027-0042",
-                             accuracy="0.05 arcsec, recalibrated")
+
+def cal_certificate(store, cal) -> int:
+    """The id of the calibration's newest certificate."""
+    from .test_records_sealed import certificates
+
+    return [c for c in certificates(store) if c.calibration_id == cal.id][-1].id
+
+
+def test_a_correction_made_before_the_amendment_is_asked_for_reaches_it(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """The register corrected first (a misread certificate number), then the amendment asked
+    for to carry it: the amendment states the correction; who corrected it does not approve
+    the amendment (one changes, another approves)."""
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings,
+                                   monkeypatch, certificate="TC-2025-0O07")
+    tech2 = services.update_user(store, None, "tech", roles="technician reviewer")
+    services.update_standard(store, tech2, std.id, certificate=USED)
+    services.amend(store, people["rev2"], first.id, "standard's certificate number misread")
+    with pytest.raises(GonioError, match="changed the calibration during its amendment"):
+        services.approve(store, tech2, cal.id)
+    page = amended_page(store, people, cal, monkeypatch)
+    assert USED in page and "TC-2025-0O07" not in page
+
+
+def test_an_edit_after_the_amendments_approval_reaches_nothing(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """What is issued is what was approved: a standard edited after the amendment's approval,
+    before its issue, is not stated on it (before: it was, and gonio db verify said
+    nothing)."""
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
     services.amend(store, people["rev2"], first.id, "customer's address misprinted")
     services.approve(store, people["rev"], cal.id)
-    amended = run_issue(store, monkeypatch)
-    page = services.file_bytes(store, amended.html_sha256).decode()
-    assert amended.replaces_id == first.id
-    assert used_cert in page and "RECAL-2027-0042" not in page, used_cert
-    assert "recalibrated" not in page and used_acc in page
-    # and an amendment of the amendment too (from its issue's record)
-    services.amend(store, people["rev2"], amended.id, "once more")
-    services.approve(store, people["rev"], cal.id)
+    services.update_standard(store, people["tech"], std.id, certificate="UNAPPROVED-1")
     page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
-    assert used_cert in page and "RECAL-2027-0042" not in page
+    assert USED in page and "UNAPPROVED-1" not in page
+
+
+def test_a_standard_attached_during_an_amendment(store, people, computed_folder,
+                                                 bench_readings, monkeypatch):
+    """A second standard attached during the amendment is stated as the register holds it;
+    the one used before stays as the replaced certificate stated it."""
+    import datetime as dt
+
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    recalibrate(store, people, std)
+    services.amend(store, people["rev2"], first.id, "a level used was not named")
+    lvl = services.add_standard(store, people["tech"], name="level", identifier="LV-3",
+                                certificate="LV-CERT-9",
+                                due_on=dt.date.today() + dt.timedelta(days=300))
+    services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id, lvl.id])
+    page = amended_page(store, people, cal, monkeypatch)
+    assert "LV-3" in page and "LV-CERT-9" in page
+    assert USED in page and RECAL not in page
+
+
+def test_an_amendment_of_one_issued_before_statements_were_kept(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """A chain whose amendment was issued before the issue kept its statement (its event has
+    none): the next amendment states the first certificate's standards, with the corrections
+    since, not the recalibration."""
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    services.amend(store, people["rev2"], first.id, "one")
+    services.approve(store, people["rev"], cal.id)
+    real = services.store_issue
+    monkeypatch.setattr(services, "store_issue",
+                        lambda st, cid, out, stated_standards=None: real(st, cid, out))
+    second = run_issue(store, monkeypatch)
+    monkeypatch.setattr(services, "store_issue", real)
+    recalibrate(store, people, std)
+    services.amend(store, people["rev2"], second.id, "two")
+    page = amended_page(store, people, cal, monkeypatch)
+    assert USED in page and RECAL not in page
 
 
 def test_who_last_changed_and_reviewed_does_not_approve_alone(store, people, computed_folder,
