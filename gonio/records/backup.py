@@ -944,21 +944,23 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
     with store.session() as s:
         shas = [r[0] for r in s.execute(select(Blob.sha256))]
         cals = s.execute(select(Calibration.id, Calibration.status, Calibration.reviewed_seal,
-                                Calibration.approved_seal).where(
+                                Calibration.approved_seal, Calibration.pending_number).where(
             Calibration.results_sha256.is_not(None)).order_by(Calibration.id)).all()
         certs = s.execute(select(Certificate.calibration_id, Certificate.number,
                                  Certificate.seal_sha256).order_by(Certificate.id)).all()
     if files:          # (``files`` False: the caller checked every stored file already)
         problems += [f"stored file {b}" for b in damaged_files(store, shas)]
     newest = {cid: (number, sealed) for cid, number, sealed in certs}
-    for cid, status, reviewed, approved in cals:
+    for cid, status, reviewed, approved, pending in cals:
+        # an approved issue that failed keeps its number and the seal approved: checked too
+        waiting = status in ("issuing", "amending") or (status == "failed" and bool(pending))
         try:
             now = services.seal(store, cid)
         except GonioError as exc:
             problems.append(f"calibration {cid}: {exc.message}")
             continue
         signed = [("its review", reviewed if status in ("reviewed",) else ""),
-                  ("its approval", approved if status in ("issuing", "amending") else ""),
+                  ("its approval", approved if waiting else ""),
                   (f"certificate {newest.get(cid, ('', ''))[0]}",
                    newest.get(cid, ("", ""))[1] or "")]
         for (what, sealed), action in zip(signed, ("review", "approve", "approve")):

@@ -111,3 +111,28 @@ def test_a_swapped_stored_file_is_named_where_the_seal_breaks(store, people, com
     _, problems = backup.verify(store)
     assert any(f"calibration {cal.id}: its stored result no longer matches the seal of its "
                "review — lab.toml is not the file signed" in p for p in problems), problems
+
+
+def test_a_file_swapped_after_approval_stays_listed_once_the_issue_failed(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """The issue refuses a stored file swapped after approval; the calibration is then failed
+    with its number reserved and the seal approved, and ``gonio db verify`` still names the
+    file (before: it listed nothing once the issue had failed)."""
+    import io
+
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev2"], cal.id)
+    other, _ = services.store_file(store, io.BytesIO(b"another summary\n"))
+    _sql(store, "UPDATE calibration_files SET sha256 = :h WHERE calibration_id = :c AND "
+                "name = 'summary.txt'", h=other, c=cal.id)
+    monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(computed_folder))
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    failed = services.calibration(store, cal.id)
+    assert failed.status == "failed" and failed.pending_number, failed.status
+    assert "summary.txt is not the file signed" in failed.error, failed.error
+    assert certificates(store) == []
+    _, problems = backup.verify(store)
+    assert any(f"calibration {cal.id}: its stored result no longer matches the seal of its "
+               "approval — summary.txt is not the file signed" in p for p in problems), problems
