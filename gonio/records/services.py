@@ -413,6 +413,10 @@ def update_user(store, actor: User | None, username: str, *, active: bool | None
     if actor is not None:
         require(actor, "admin")
     with store.writing() as s:
+        # every admin's row locked until commit: two admins changing each other at once
+        # (PostgreSQL, READ COMMITTED) are counted one after the other, so the last active
+        # admin stays (SQLite's writing transaction is exclusive already)
+        s.execute(select(User.id).where(User.roles.like("%admin%")).with_for_update()).all()
         u = s.scalar(select(User).where(User.username == text(username, "username",
                                                                max_len=64)))
         if u is None:

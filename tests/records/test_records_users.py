@@ -181,3 +181,47 @@ def test_two_line_customer_address_reaches_the_laboratory_file(sqlite_store, tmp
     lab = load_lab(write_lab_toml(services.lab_details(sqlite_store, cal.id, final=False),
                                   tmp_path / "lab.toml"))
     assert lab["customer"]["address"] == "1 Road\nOld Town"
+
+
+def test_two_admins_deactivating_each_other_at_once_leave_one(store, monkeypatch):
+    """Two admins deactivate each other in transactions that overlap: the second waits for the
+    first and is refused as the last active admin (before, on PostgreSQL, both committed and
+    the records had no active administrator, so anyone could then make one)."""
+    import threading
+
+    from gonio.records import queries
+
+    from .conftest import PASSWORD
+
+    a = services.create_user(store, None, "a", PASSWORD, "admin")
+    b = services.create_user(store, None, "b", PASSWORD, "admin")
+    real = services.audit
+    t1_in_audit, t2_done = threading.Event(), threading.Event()
+
+    def slow_audit(s, actor, action, entity, *rest, **kw):
+        if action == "update" and entity == "user" and threading.current_thread().name == "t1":
+            t1_in_audit.set()
+            t2_done.wait(3)             # the first transaction held open while t2 runs
+        return real(s, actor, action, entity, *rest, **kw)
+
+    monkeypatch.setattr(services, "audit", slow_audit)
+    errs = {}
+
+    def run(name, actor, target):
+        try:
+            services.update_user(store, actor, target, active=False)
+        except GonioError as exc:
+            errs[name] = exc.message
+
+    t1 = threading.Thread(target=run, args=("t1", a, "b"), name="t1")
+    t1.start()
+    assert t1_in_audit.wait(10)
+    t2 = threading.Thread(target=run, args=("t2", b, "a"), name="t2")
+    t2.start()
+    t2.join(1.5)
+    t2_done.set()
+    t1.join(30)
+    t2.join(30)
+    monkeypatch.setattr(services, "audit", real)
+    assert queries.active_admins(store) == ["a"], (errs, queries.active_admins(store))
+    assert "t1" not in errs and "last active admin" in errs.get("t2", ""), errs
