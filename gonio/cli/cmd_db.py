@@ -564,21 +564,42 @@ def add_admin_option(q) -> None:
 def managing_admin(store, name: str | None, command: str):
     """The administrator managing users or settings on the command line: the records user
     ``name`` (else ``$GONIO_USER``) logged in with their password (:func:`logged_in`) and
-    holding the admin role. With no name given this is None only while the records have no active
-    administrator (setting up a new database: the first users, ``actor=None`` in the audit
-    trail); once they have one, a GonioError (one line) asks for the login, so that an
-    account on the machine cannot create, promote or take over records users, nor change
-    the laboratory's name, accreditation or time zone."""
+    holding the admin role.
+
+    None while the records hold no user at all (a new database being set up: no one to log
+    in as, a name given is not asked for; ``actor=None`` in the audit trail): its first user
+    is then its administrator (:func:`check_first_user`). Records that hold users but no
+    active administrator (made before this rule, or restored so) are refused too: an
+    account on the machine cannot make itself their administrator; whoever administers the
+    database itself makes one (``gonio.records.services.update_user`` with ``actor=None``).
+    Once there are users, a GonioError (one line) asks for the login, so that an account on
+    the machine cannot create, promote or take over records users, nor change the
+    laboratory's name, accreditation or time zone."""
     from gonio.records import queries, services
 
+    if not queries.users(store):
+        return None
     name = name or os.environ.get("GONIO_USER") or None
     if name is None:
         if not queries.active_admins(store):
-            return None
+            raise GonioError(f"{command}: the records have users but no active "
+                             "administrator; none can be made from the command line "
+                             "without one (whoever administers the database makes one: "
+                             "docs/records.md, 'Users')", key="--user")
         raise GonioError(f"{command}: the records have an active administrator, who does "
                          "this: give --user ADMIN (or $GONIO_USER), with their password in "
                          "$GONIO_PASSWORD or asked", key="--user")
     return services.require(logged_in(store, name, command), "admin")
+
+
+def check_first_user(roles: str) -> None:
+    """The first user of a new database, created without a login, is its administrator: a
+    GonioError (one line) where ``roles`` lacks admin."""
+    if "admin" not in roles.replace(",", " ").split():
+        raise GonioError("the records hold no user yet: the first is their administrator "
+                         "(give --roles admin, with technician or reviewer as well if the "
+                         "same person does those); the administrator then creates the "
+                         "others with --user ADMIN", key="--roles")
 
 
 def run_create_user(args) -> int:
@@ -587,6 +608,8 @@ def run_create_user(args) -> int:
     store = _store(args)
     try:
         admin = managing_admin(store, args.user, "db create-user")
+        if admin is None:
+            check_first_user(args.roles)
         password = new_password(args.username, admin is None)
         u = services.create_user(store, admin, args.username, password,
                                  args.roles.replace(",", " "), args.full_name)

@@ -265,7 +265,7 @@ def records_of_alice(tmp_path, monkeypatch):
     standard RT-07 (due in 300 days)."""
     data = tmp_path / "data"
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
-    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
+    assert main(["db", "create-user", "alice", "--roles", "admin technician", "--data",
                  str(data)]) == 0
     st = open_store(None, data)
     try:

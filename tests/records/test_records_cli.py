@@ -16,7 +16,7 @@ def test_db_commands_round_trip(tmp_path, computed_folder, bench_readings, monke
     data, other = tmp_path / "data", tmp_path / "other"
     assert main(["db", "init", "--data", str(data), "--lab-name", "Angle Lab"]) == 0
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
-    assert main(["db", "create-user", "alice", "--roles", "technician,reviewer",
+    assert main(["db", "create-user", "alice", "--roles", "admin,technician,reviewer",
                  "--data", str(data)]) == 0
     folder = tmp_path / "run"
     shutil.copytree(computed_folder, folder)
@@ -29,7 +29,7 @@ def test_db_commands_round_trip(tmp_path, computed_folder, bench_readings, monke
     st = open_store(None, other)
     try:
         assert services.settings(st)["lab_name"] == "Angle Lab"
-        assert services.user(st, "alice").roles == "technician reviewer"
+        assert services.user(st, "alice").roles == "technician reviewer admin"
         assert services.calibration(st, 1).status == "computed"
     finally:
         st.close()
@@ -141,7 +141,7 @@ def test_a_named_user_proves_it_with_their_password(tmp_path, capsys, monkeypatc
 
     data = tmp_path / "data"
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
-    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
+    assert main(["db", "create-user", "alice", "--roles", "admin technician", "--data",
                  str(data)]) == 0
     capsys.readouterr()
     attach = ["db", "attach", "1", "--user", "alice", "--temperature", "20", "--humidity",

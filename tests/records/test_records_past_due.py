@@ -61,7 +61,7 @@ def standards(data) -> dict:
 
 def test_add_standard_past_due_on_the_command_line(tmp_path):
     data = tmp_path / "data"
-    gonio("db", "create-user", "alice", "--roles", "technician", data=data)
+    gonio("db", "create-user", "alice", "--roles", "admin technician", data=data)
     late = TODAY - dt.timedelta(days=1)
     r = gonio("db", "add-standard", "AC-1", "--name", "autocollimator", "--due-on", late,
               "--user", "alice", data=data, rc=2)

@@ -47,7 +47,7 @@ def test_a_locked_database_is_one_line(tmp_path, capsys, monkeypatch):
     other = sqlite3.connect(data / "records.sqlite3", isolation_level=None)
     other.execute("BEGIN EXCLUSIVE")
     try:
-        err = cli(["db", "create-user", "alice", "--data", data], capsys)
+        err = cli(["db", "create-user", "alice", "--roles", "admin", "--data", data], capsys)
     finally:
         other.execute("ROLLBACK")
         other.close()
@@ -59,7 +59,8 @@ def test_a_read_only_database_is_one_line(tmp_path, capsys, monkeypatch):
     cli(["db", "init", "--data", data], capsys, 0)
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
     url = f"sqlite:///file:{data / 'records.sqlite3'}?mode=ro&uri=true"
-    err = cli(["db", "create-user", "alice", "--database", url, "--data", data], capsys)
+    err = cli(["db", "create-user", "alice", "--roles", "admin", "--database", url,
+               "--data", data], capsys)
     assert "the database is read-only" in err
 
 

@@ -79,9 +79,14 @@ def test_users_cannot_be_managed_without_an_admin_login(tmp_path, monkeypatch, c
     data = str(tmp_path / "data")
     monkeypatch.delenv("GONIO_USER", raising=False)
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
-    assert main(["db", "create-user", "tech", "--roles", "technician", "--data", data]) == 0
-    # no active admin yet: still setting up
+    # a new database: its first user, created without a login, is its administrator
+    assert main(["db", "create-user", "tech", "--roles", "technician", "--data", data]) == 2
+    assert "the first is their administrator" in capsys.readouterr().err
     assert main(["db", "create-user", "boss", "--roles", "admin", "--data", data]) == 0
+    monkeypatch.setenv("GONIO_NEW_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "tech", "--roles", "technician", "--user", "boss",
+                 "--data", data]) == 0
+    monkeypatch.delenv("GONIO_NEW_PASSWORD")
     capsys.readouterr()
     attempts = (["db", "create-user", "mallory", "--roles", "admin"],
                 ["db", "set-user", "tech", "--roles", "admin technician"],
@@ -225,3 +230,50 @@ def test_two_admins_deactivating_each_other_at_once_leave_one(store, monkeypatch
     monkeypatch.setattr(services, "audit", real)
     assert queries.active_admins(store) == ["a"], (errs, queries.active_admins(store))
     assert "t1" not in errs and "last active admin" in errs.get("t2", ""), errs
+
+
+def test_a_new_database_is_set_up_whatever_gonio_user_says(tmp_path, monkeypatch, capsys):
+    """A machine whose profile sets $GONIO_USER still sets up a new database: with no user
+    yet there is no one to log in as, so the name is not asked for."""
+    data = str(tmp_path / "data")
+    monkeypatch.setenv("GONIO_USER", "alice")
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "init", "--lab-name", "Angle Lab", "--data", data]) == 0
+    assert main(["db", "create-user", "alice", "--roles", "admin technician",
+                 "--data", data]) == 0
+    # from now on the name is the login, the password proves it
+    monkeypatch.setenv("GONIO_NEW_PASSWORD", "bob's long password")
+    assert main(["db", "create-user", "bob", "--data", data]) == 0
+    st = open_store(None, data)
+    try:
+        assert services.settings(st)["lab_name"] == "Angle Lab"
+        assert services.user(st, "bob").roles == "technician"
+    finally:
+        st.close()
+
+
+def test_records_with_users_and_no_admin_get_none_from_the_command_line(tmp_path,
+                                                                         monkeypatch, capsys):
+    """Records in use whose users include no active administrator (made before the first user
+    had to be one, or restored so): no account on the machine makes itself their
+    administrator nor resets a password without a login."""
+    data = tmp_path / "data"
+    st = open_store(None, data)
+    try:
+        services.create_user(st, None, "alice", PASSWORD, "technician")
+    finally:
+        st.close()
+    monkeypatch.delenv("GONIO_USER", raising=False)
+    monkeypatch.setenv("GONIO_PASSWORD", "mallory's password!")
+    for argv in (["db", "create-user", "mallory", "--roles", "admin"],
+                 ["db", "set-user", "alice", "--reset-password"],
+                 ["db", "init", "--lab-name", "Mallory's Lab"]):
+        assert main(argv + ["--data", str(data)]) == 2, argv
+        err = capsys.readouterr().err
+        assert "users but no active administrator" in err and err.count("\n") == 1, err
+    st = open_store(None, data)
+    try:
+        assert services.user(st, "mallory") is None
+        assert auth.authenticate(st, "alice", PASSWORD).username == "alice"
+    finally:
+        st.close()
