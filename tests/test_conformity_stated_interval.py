@@ -201,13 +201,12 @@ def test_k_from_a_non_normal_distribution_gives_no_normal_probability():
             zh = translator()(f"— ({c.probability_model})")
             assert zh and "1.73" in zh and "不给出" in zh
         else:
-            # the outcome on the value and U as printed (76434.847 ± 0.023: decided on what
-            # is stated, tests/test_conformity_printed_value.py), the probability on the
-            # measurement result before rounding: T − y = U exactly, Φ(k) at T
+            # on the value and U as printed (76434.847 ± 0.023: decided on what is stated,
+            # tests/test_conformity_printed_value.py): T − y = U exactly, Φ(k) at T
             y_p, U_p = 76434.847, 0.023
             assert c.value == y_p and c.U == U_p
             assert c.conformance_probability == pytest.approx(want - normal_cdf(
-                (76434.80 - (T - U)) / (U / k)), rel=1e-9)
+                (76434.80 - y_p) / (U_p / k)), rel=1e-9)
 
 
 @pytest.mark.parametrize("r", ["0.0", "0.5", "0.99"])

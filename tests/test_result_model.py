@@ -82,7 +82,7 @@ def test_conformity_for_any_specification_item():
     assert (b.rule, b.outcome, b.limits_from, b.source) == ("guarded", "pass", "lab file",
                                                             "datasheet")
     assert b.guard_band == pytest.approx(0.056) and b.acceptance_upper == pytest.approx(0.444)
-    u = 0.0555 / 2.776      # the probability: the measurement result before rounding
+    u = 0.056 / 2.776
     p_c = 0.5 * (math.erf((0.5 - 0.40) / u / math.sqrt(2)) - math.erf((-0.5 - 0.40) / u / math.sqrt(2)))
     assert b.conformance_probability == pytest.approx(p_c, rel=1e-12)
     t = r.items["threshold"].conformity

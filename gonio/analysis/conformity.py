@@ -456,9 +456,6 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
                    chi2_nu=nu_chi2, no_probability=no_p)
         raw = decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
                      chi2_nu=nu_chi2, no_probability=no_p)
-        # the outcome on the printed numbers, the probabilities of the measurement result
-        # before rounding (one basis for every p_c, as a χ² interval item's from its s)
-        c = with_measured_probability(c, raw)
         c = replace(stricter_of(c, raw, it.value),
                     **_acceptance_texts(c.acceptance_lower, c.acceptance_upper, bounds, dec))
     c = replace(c, limits_from=origin)
@@ -466,39 +463,6 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str,
     return replace(c, acceptance_empty=bool(
         (lo is not None and hi is not None and lo > hi)
         or (it.nonnegative and hi is not None and hi < 0)))
-
-
-def with_measured_probability(printed: Conformity, measured: Conformity) -> Conformity:
-    """The decision on the printed numbers (``printed``: its outcome, acceptance limits,
-    guard band) with the probabilities of the measurement result before rounding
-    (``measured``: the same rule on the unrounded y and U = k·u).
-
-    The one rule for a probability of conformance (JCGM 106 7.3): it is computed from the
-    measurand's distribution given the measurement result as measured, never from its
-    rounded statement — N(y, u²) with the unrounded y and u = U/k for an item stated y ± U,
-    σ = s·√(ν/χ²_ν) with the unrounded s (and the ν its interval was computed with) for a
-    standard deviation (:func:`_decided_interval`). Rounding to the statement moves y by up to
-    half a unit of U's second significant digit (up to 0.1·u) and can leave a χ² estimate s
-    one digit; a probability from those digits would be a property of the text, not of the
-    measurement. The outcome stays the printed one (a printed value above a printed limit
-    never passes, :func:`stricter_of`), so under simple acceptance a value printed just above
-    a limit it lies just below "fails" with a false-reject probability a little above 50 %.
-
-    >>> r = DecisionRule("simple")
-    >>> a = decide("b", -0.0757, 0.0048, 2.0, Limits(-0.08, 0.5), r)
-    >>> b = decide("b", -0.07566, 0.00483, 2.0, Limits(-0.08, 0.5), r)
-    >>> c = with_measured_probability(a, b)
-    >>> c.conformance_probability == b.conformance_probability != a.conformance_probability
-    True
-    >>> c.false_accept_probability == 1 - b.conformance_probability, c.acceptance_lower
-    (True, -0.08)
-    """
-    p_c = measured.conformance_probability
-    return replace(printed, conformance_probability=p_c,
-                   probability_model=measured.probability_model,
-                   false_accept_probability=(1.0 - p_c) if printed.accepted
-                   and p_c is not None else None,
-                   false_reject_probability=p_c if not printed.accepted else None)
 
 
 #: Outcomes from the least to the most strict (:func:`stricter_of`).
@@ -711,8 +675,7 @@ def _decided_interval(key: str, it, bounds: Limits, rule: DecisionRule,
 
     An extreme of magnitudes (``magnitude``: v, lo, hi ≥ 0 against a symmetric limit ±M) is
     accepted on its upper end only. A probability is given only for the χ² interval of a
-    standard deviation (its χ² model, from the estimate s before rounding,
-    :func:`with_measured_probability`); elsewhere none
+    standard deviation (its χ² model, from the estimate s); elsewhere none
     (:data:`NOT_NORMAL_PROBABILITY_MODEL`), and an item accepted under a guard band (r ≥ 1)
     states the bound its rule implies, ``false_accept_bound`` = 1 − p: its stated interval's
     upper end lies within the limit, and the measurand lies above that end with probability
