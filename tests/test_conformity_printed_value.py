@@ -240,9 +240,11 @@ def test_k_measured_beyond_printed_inside_through_gonio_calibrate(tmp_path, caps
     assert m in html
     # the same measured value in summary.txt and the DCC's statement and data
     summary = (tmp_path / "b" / "summary.txt").read_text(encoding="utf-8")
-    assert f"decided on the measured value before rounding, {m}," in summary
+    said = f"decided on the measurement result before rounding: its value {m} against its " \
+           f"acceptance interval {c['decided_on_measured_acceptance']}"
+    assert said in summary
     dcc = (tmp_path / "b" / "certificate.dcc.xml").read_text(encoding="utf-8")
-    assert f"decided on the measured value before rounding, {m}," in dcc
+    assert said in dcc
     assert "measured value before rounding (decided the outcome)" in dcc
-    assert ("Decided on the measured value before rounding" in html) == (lang == "en")
-    assert ("按修约前的测得值判定" in html) == (lang == "zh")
+    assert ("Decided on the measurement result before rounding" in html) == (lang == "en")
+    assert ("按修约前的测量结果判定" in html) == (lang == "zh")

@@ -502,6 +502,8 @@ def stricter_of(printed: Conformity, measured: Conformity, value: float) -> Conf
               measured.acceptance_upper)
     return replace(printed, outcome=measured.outcome, accepted=measured.accepted,
                    decided_on_measured=measured_value_text(value, limits),
+                   decided_on_measured_acceptance=measured_acceptance_text(
+                       measured.acceptance_lower, measured.acceptance_upper, value),
                    false_accept_probability=(None if not measured.accepted or p_c is None
                                              else 1.0 - p_c),
                    false_reject_probability=None if measured.accepted else p_c,
@@ -510,6 +512,33 @@ def stricter_of(printed: Conformity, measured: Conformity, value: float) -> Conf
 
 #: The fewest significant digits :func:`measured_value_text` prints.
 MEASURED_TEXT_MIN_DIGITS = 10
+
+
+def measured_acceptance_text(lower: float | None, upper: float | None, value: float
+                             ) -> str | None:
+    """The acceptance interval a measured decision used (:func:`stricter_of`), as the
+    statement names it: "≤ b", "≥ a" or "[a, b]" (minus signs as "−"), each end printed with
+    :func:`measured_value_text` against the measured value, so that the text shows on which
+    side of it the value lies; None where both ends are open. An empty interval (a > b) is
+    printed as it is.
+
+    >>> measured_acceptance_text(None, 783.94479, 786.4851027)
+    '≤ 783.94479'
+    >>> measured_acceptance_text(-0.0757, 0.49, -0.07566)
+    '[−0.0757, 0.49]'
+    """
+    def end(x: float) -> str:
+        return measured_value_text(float(x), (value,)).replace("-", "−")
+
+    lo = None if lower is None or not math.isfinite(float(lower)) else float(lower)
+    hi = None if upper is None or not math.isfinite(float(upper)) else float(upper)
+    if lo is None and hi is None:
+        return None
+    if lo is None:
+        return f"≤ {end(hi)}"
+    if hi is None:
+        return f"≥ {end(lo)}"
+    return f"[{end(lo)}, {end(hi)}]"
 
 
 def measured_value_text(value: float, limits) -> str:

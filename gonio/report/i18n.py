@@ -345,12 +345,17 @@ LABELS: dict[str, dict[str, str]] = {
                     "zh": "“—”：{items} 不给出概率：其分布不是 gonio 所计算的分布（95 % 区间不是正态"
                           "分布或 χ² 分布的区间，或包含因子 k 来自非正态的合成分布），正态模型 N(y, u) "
                           "与之矛盾（JCGM 106:2012 取被测量自身的分布）；判定依据所给区间或 y ± U 作出。"},
-    "c_measured_note": {"en": "Decided on the measured value before rounding ({items}): it lies "
-                              "beyond the acceptance limit where the printed value, rounded to "
-                              "the digits stated, does not; the stricter outcome is stated "
-                              "(ILAC-G8:09/2019 decides on the measurement result).",
-                        "zh": "按修约前的测得值判定（{items}）：该值超出接受限，而修约到所给位数的"
-                              "打印值未超出；给出较严格的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
+    "c_measured_note": {"en": "Decided on the measurement result before rounding ({items}): "
+                              "the value, against the acceptance interval its value and U "
+                              "before rounding give, lies beyond the acceptance limit, where "
+                              "the printed numbers, rounded to the digits stated, do not; the "
+                              "stricter outcome is stated (ILAC-G8:09/2019 decides on the "
+                              "measurement result).",
+                        "zh": "按修约前的测量结果判定（{items}）：以修约前的值及其 U 所得的接受区间"
+                              "衡量，该值超出接受限，而修约到所给位数的打印数值未超出；给出较严格"
+                              "的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
+    "c_measured_against": {"en": ", acceptance interval {acceptance}",
+                           "zh": "，接受区间 {acceptance}"},
     "c_interval_band_note": {
         "en": "Guard band of an item stated by its {p} % interval alone ({items}): such an item "
               "is decided on its interval as printed, with w = r·δ, δ read off the printed "

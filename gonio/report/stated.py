@@ -347,14 +347,20 @@ def no_probability_note(decided, L: dict, name_of, with_pc: bool = True) -> str:
 def measured_note(decided, L: dict, name_of, unit_of=None) -> str:
     """The note under a conformity table for the items whose outcome the measured value before
     rounding decided (results.json ``conformity.decided_on_measured``,
-    :func:`gonio.analysis.conformity.stricter_of`): their printed value lies inside the
-    acceptance limit, the measured value beyond it, and the stricter outcome is stated. ""
+    :func:`gonio.analysis.conformity.stricter_of`): their printed numbers lie inside the
+    acceptance limit, the measured value beyond the acceptance interval its value and U before
+    rounding give (``decided_on_measured_acceptance``, named beside it), and the stricter
+    outcome is stated. ""
     where there is none. ``decided``: (key, conformity) pairs (dicts or Conformity)."""
-    def of(c):
-        return c.get("decided_on_measured") if isinstance(c, dict) else getattr(
-            c, "decided_on_measured", None)
-    parts = [f"{name_of(k)} = {of(c).replace('-', '−')}"
-             + (f" {unit_of(k)}" if unit_of and unit_of(k) else "")
+    def of(c, name="decided_on_measured"):
+        return c.get(name) if isinstance(c, dict) else getattr(c, name, None)
+
+    def unit(k):
+        return f" {unit_of(k)}" if unit_of and unit_of(k) else ""
+
+    parts = [f"{name_of(k)} = {of(c).replace('-', '−')}{unit(k)}"
+             + (L["c_measured_against"].format(acceptance=f"{acc}{unit(k)}")
+                if (acc := of(c, "decided_on_measured_acceptance")) else "")
              for k, c in decided if c and of(c)]
     if not parts:
         return ""

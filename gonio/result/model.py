@@ -244,6 +244,11 @@ class Conformity:
     #: the measured value (before rounding, as text) where it decided a stricter outcome than
     #: the printed value would (:func:`gonio.analysis.conformity.stricter_of`), else None
     decided_on_measured: str | None = None
+    #: with ``decided_on_measured``: the acceptance interval the measured decision used (from
+    #: the value and U before rounding), as text ("≤ 783.9447", "[−0.08, 0.4991]"), so that
+    #: the statement names the limit the measured value lies beyond; None otherwise (or an
+    #: older result)
+    decided_on_measured_acceptance: str | None = None
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

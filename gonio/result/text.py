@@ -114,22 +114,38 @@ def conformity_text(c) -> str:
 #: The clause summary.txt and the DCC add to a decision the measured value before rounding
 #: decided (:func:`gonio.analysis.conformity.stricter_of`; the certificate's note under the
 #: conformity table says the same, ``c_measured_note``).
-MEASURED_CLAUSE = ("decided on the measured value before rounding, {value}, which lies beyond "
-                   "the acceptance limit where the printed value does not")
+MEASURED_CLAUSE = ("decided on the measurement result before rounding: its value {value}{against} "
+                   "lies beyond the acceptance limit, where the printed numbers do not")
+#: The acceptance interval the measured decision used, in :data:`MEASURED_CLAUSE`.
+MEASURED_AGAINST = " against its acceptance interval {acceptance} (from the value and U before rounding)"
 
 
 def measured_clause(c) -> str:
     """:data:`MEASURED_CLAUSE` for a decision (a Conformity or its results.json dict) whose
     outcome the measured value before rounding decided (``decided_on_measured``), else "".
 
-    >>> measured_clause({"decided_on_measured": "76434.850926"}).split(", which")[0]
-    'decided on the measured value before rounding, 76434.850926'
+    With ``decided_on_measured_acceptance`` it names the acceptance interval that decision
+    used (:data:`MEASURED_AGAINST`): where U's rounding moved the limit, the printed value can
+    lie inside the printed acceptance interval and the measured one inside it too.
+
+    >>> measured_clause({"decided_on_measured": "76434.850926"}).split(" lies")[0]
+    'decided on the measurement result before rounding: its value 76434.850926'
+    >>> measured_clause({"decided_on_measured": "786.4851027",
+    ...     "decided_on_measured_acceptance": "≤ 783.94479"}).split(" (from")[0]
+    'decided on the measurement result before rounding: its value 786.4851027 against its \
+acceptance interval ≤ 783.94479'
     >>> measured_clause({"decided_on_measured": None})
     ''
     """
-    m = c.get("decided_on_measured") if isinstance(c, dict) else getattr(
-        c, "decided_on_measured", None)
-    return MEASURED_CLAUSE.format(value=m) if m else ""
+    def get(name):
+        return c.get(name) if isinstance(c, dict) else getattr(c, name, None)
+
+    m = get("decided_on_measured")
+    if not m:
+        return ""
+    acc = get("decided_on_measured_acceptance")
+    return MEASURED_CLAUSE.format(value=m, against=MEASURED_AGAINST.format(acceptance=acc)
+                                  if acc else "")
 
 
 #: Where the certificate takes each identity subject's text from: (laboratory file section and
