@@ -216,13 +216,14 @@ def calibration_page(store, cal_id: int, lang: str = "en") -> dict | None:
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
     doc = stored_result(store, cal.results_sha256) if sealed else None   # read once
     stated = statements_of(doc) if sealed else {}
+    texts = result_texts(doc, lang, stated)
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
             "seal": sealed, "seal_error": broken,
             "place": cal.place or settings(store)["lab_place"], "missing": missing,
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
-            "stated": stated, **result_texts(doc, lang, stated),
-            "conformity": conformity_of(doc if sealed else None),
+            "stated": stated, **texts,
+            "conformity": conformity_of(doc if sealed else None, lang, texts["titles"]),
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
             "table_calibration": table_calibration_used(table_sha, doc, table_name),
             "file_names": {TABLE_CALIBRATION: table_name} if table_sha else {},

@@ -257,7 +257,7 @@ _MAX_ABS: dict[tuple[str, str], frozenset] = {}
 # ------------------------------------------------ the stored decisions as the certificate states them
 
 
-def conformity_of(doc, lang: str = "en") -> dict:
+def conformity_of(doc, lang: str = "en", titles: dict | None = None) -> dict:
     """The statement of conformity of the results.json ``doc`` as the certificate states it,
     for a page: ``rules`` (the decision rule's paragraph of each rule used), ``rows`` (one per
     item with a stored decision, ``items.<key>.conformity``, in the result's order: ``key``,
@@ -268,7 +268,9 @@ def conformity_of(doc, lang: str = "en") -> dict:
     as decided and rounded once in the Result, the outcome) and the guard band as
     ``summary.txt`` prints it (:func:`gonio.result.text.band_text`, with its lower band where
     the interval is not symmetric); each negative number with U+2212. A pure function of the
-    stored result: nothing is decided or computed again; no decision, no rows.
+    stored result: nothing is decided or computed again; no decision, no rows. ``lang``: the
+    page's language, ``titles``: each item's name as the certificate in that language names
+    it (:func:`gonio.records.queries.result_texts`' ``titles``; else the stored titles).
 
     >>> doc = {"items": {"B": {"title": "Bias", "unit": "deg/h", "value": 1.0,
     ...     "conformity": {"item": "B", "U": 0.2, "lower": -1.0, "upper": 1.0,
@@ -291,7 +293,7 @@ def conformity_of(doc, lang: str = "en") -> dict:
     L = labels(lang)
 
     def name_of(k):
-        return str(items[k].get("title") or k)
+        return str((titles or {}).get(k) or items[k].get("title") or k)
 
     def unit_of(k):
         return unit_text(items[k].get("unit")) or L["unit_one"]
@@ -313,8 +315,7 @@ def conformity_of(doc, lang: str = "en") -> dict:
         if not c.get("outcome"):
             band = "—"
         elif w_lo is not None and w:
-            band = (f"{band_text(w_lo)} {u} at the lower limit, {band_text(w)} {u} "
-                    "at the upper")
+            band = L["c_band_two"].format(lo=f"{band_text(w_lo)} {u}", hi=f"{band_text(w)} {u}")
         else:
             band = f"{band_text(w) if w else '0'} {u}"
         rows.append({"key": key, "title": name, "limits": limits, "acceptance": acceptance,

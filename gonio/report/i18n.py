@@ -354,6 +354,9 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "按修约前的测量结果判定（{items}）：以修约前的值及其 U 所得的接受区间"
                               "衡量，该值超出接受限，而修约到所给位数的打印数值未超出；给出较严格"
                               "的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
+    "c_guard_w": {"en": "Guard band w", "zh": "保护带 w"},
+    "c_band_two": {"en": "{lo} at the lower limit, {hi} at the upper",
+                   "zh": "下限处 {lo}，上限处 {hi}"},
     "c_measured_against": {"en": ", acceptance interval {acceptance}",
                            "zh": "，接受区间 {acceptance}"},
     "c_interval_band_note": {

@@ -100,7 +100,9 @@ def page(tmp_path_factory):
     try:
         cal = services.calibration(store, 1)
         doc = json.loads(services.file_bytes(store, cal.results_sha256))
-        text = web_client(store).get("/calibrations/1").text
+        client = web_client(store)
+        text = client.get("/calibrations/1").text
+        text_zh = client.get("/calibrations/1?lang=zh").text
     finally:
         store.close()
     table = re.search(r'<table id="conformity">(.*?)</table>', text, re.S)
@@ -109,7 +111,7 @@ def page(tmp_path_factory):
                    re.findall(r"<td[^>]*>(.*?)</td>", body, re.S)])
             for key, body in re.findall(r'<tr data-item="([^"]+)">(.*?)</tr>', table.group(1),
                                         re.S)]
-    return {"rows": rows, "doc": doc, "text": text}
+    return {"rows": rows, "doc": doc, "text": text, "text_zh": text_zh}
 
 
 def test_the_page_shows_the_decisions_results_json_holds(page):
@@ -159,3 +161,32 @@ def test_acceptance_interval_and_guard_band_as_decided(page):
         e = w.adjusted() - 5                                   # the w decided, exactly
         assert number(band.split(" ")[0]) == w.quantize(Decimal(1).scaleb(e),
                                                          ROUND_HALF_UP), (key, band, w)
+
+
+def test_the_chinese_page_states_conformity_in_chinese(page):
+    """``?lang=zh``: the statement of conformity in Chinese as the zh certificate states it —
+    its headings, each item's Chinese name (the specification's ``item_titles``), the outcome
+    and the notes; no English item title is left (before: the table and its notes named the
+    items by their stored English titles, and its headings were English)."""
+    from gonio.specs import get
+
+    text = page["text_zh"]
+    table = re.search(r'<table id="conformity">(.*?)</table>', text, re.S)
+    assert table
+    L = labels("zh")
+    for key in ("c_outcome", "c_limits", "c_accept", "c_guard_w", "c_pc", "c_pfa"):
+        assert f"<th>{L[key]}</th>" in table.group(1), key
+    assert f"<h2>{L['conformity']}</h2>" in text
+    titles = get("jjf1535-2015").output_hook("item_titles")(page["doc"], "zh")
+    decided = {k: it["conformity"] for k, it in page["doc"]["items"].items()
+               if it.get("conformity")}
+    for key, body in re.findall(r'<tr data-item="([^"]+)">(.*?)</tr>', table.group(1), re.S):
+        cells = [html_module.unescape(re.sub(r"<[^>]+>", "", c))
+                 for c in re.findall(r"<td[^>]*>(.*?)</td>", body, re.S)]
+        assert cells[0] == titles[key] and re.search(r"[\u4e00-\u9fff]", cells[0]), cells
+        assert cells[1].split("（")[0].split(" (")[0] == L[decided[key]["outcome"]], cells
+    section = text[text.index('<table id="conformity">'):]
+    section = section[:section.index("<h2", 1)] if "<h2" in section else section
+    shown = html_module.unescape(re.sub(r"<[^>]+>", " ", section))     # its words, no tags
+    for key in decided:
+        assert page["doc"]["items"][key]["title"] not in shown, key
