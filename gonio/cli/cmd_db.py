@@ -30,30 +30,7 @@ def register(sub) -> None:
                         "into the store, which every process then reads)")
     add_admin_option(q)
     q.set_defaults(func=run_init)
-    q = dsub.add_parser("create-user", help="add a user (an administrator's login, --user; "
-                                            "the new password from $GONIO_NEW_PASSWORD or "
-                                            "asked)")
-    add_store_options(q)
-    q.add_argument("username")
-    q.add_argument("--roles", default="technician",
-                   help="space- or comma-separated: technician, reviewer, admin")
-    q.add_argument("--full-name", default="")
-    add_admin_option(q)
-    q.set_defaults(func=run_create_user)
-    q = dsub.add_parser("set-user", help="deactivate or reactivate a user, change the roles, "
-                                         "reset the password (an administrator's login, "
-                                         "--user; the new password from $GONIO_NEW_PASSWORD "
-                                         "or asked)")
-    add_store_options(q)
-    q.add_argument("username")
-    add_admin_option(q)
-    g = q.add_mutually_exclusive_group()
-    g.add_argument("--deactivate", dest="active", action="store_const", const=False)
-    g.add_argument("--activate", dest="active", action="store_const", const=True)
-    q.add_argument("--roles", default=None,
-                   help="the new roles, space- or comma-separated")
-    q.add_argument("--reset-password", action="store_true")
-    q.set_defaults(func=run_set_user, active=None)
+    add_user_commands(dsub)
     add_import(dsub)
     q = dsub.add_parser("attach", help="attach the registered standards used and the "
                                        "environment to a calibration not yet reviewed")
@@ -138,6 +115,34 @@ def register(sub) -> None:
     for action in dsub.choices.values():
         action.set_defaults(func=database_errors(action.get_default("func")))
     hook_calibrate(sub)
+
+
+def add_user_commands(dsub) -> None:
+    """``gonio db create-user`` and ``gonio db set-user``: their options."""
+    q = dsub.add_parser("create-user", help="add a user (an administrator's login, --user; "
+                                            "the new password from $GONIO_NEW_PASSWORD or "
+                                            "asked)")
+    add_store_options(q)
+    q.add_argument("username")
+    q.add_argument("--roles", default="technician",
+                   help="space- or comma-separated: technician, reviewer, admin")
+    q.add_argument("--full-name", default="")
+    add_admin_option(q)
+    q.set_defaults(func=run_create_user)
+    q = dsub.add_parser("set-user", help="deactivate or reactivate a user, change the roles, "
+                                         "reset the password (an administrator's login, "
+                                         "--user; the new password from $GONIO_NEW_PASSWORD "
+                                         "or asked)")
+    add_store_options(q)
+    q.add_argument("username")
+    add_admin_option(q)
+    g = q.add_mutually_exclusive_group()
+    g.add_argument("--deactivate", dest="active", action="store_const", const=False)
+    g.add_argument("--activate", dest="active", action="store_const", const=True)
+    q.add_argument("--roles", default=None,
+                   help="the new roles, space- or comma-separated")
+    q.add_argument("--reset-password", action="store_true")
+    q.set_defaults(func=run_set_user, active=None)
 
 
 def add_import(dsub) -> None:

@@ -23,7 +23,8 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :class:`Num`, :class:`NoBreakText`, :func:`num`,
                                 :func:`lookup`, :func:`item_nums`,
                                 :func:`conformity_texts`, :func:`no_probability_note`,
-                                :func:`measured_note`, :func:`condition_text`,
+                                :func:`measured_note`, :func:`skewed_note`,
+                                :func:`condition_text`,
                                 :func:`interval_band_note`, :func:`stated_p`,
                                 :func:`declaration_parts`, :func:`interval_legend`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
@@ -69,7 +70,8 @@ from gonio.report.render import (Block, font_families, render_html, render_pdf,
                                  render_pdf_figures)
 from gonio.report.stated import (NoBreakText, Num, conformity_texts, declaration_parts,
                                  interval_legend, item_nums, lookup, interval_band_note,
-                                 measured_note, no_probability_note, num, stated_p)
+                                 measured_note, no_probability_note, num, skewed_note,
+                                 stated_p)
 from gonio.report.text import clean_tree
 
 __all__ = [
@@ -78,7 +80,7 @@ __all__ = [
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
-    "no_probability_note", "measured_note", "interval_band_note", "stated_p",
+    "no_probability_note", "measured_note", "skewed_note", "interval_band_note", "stated_p",
     "declaration_parts",
     "interval_legend", "interval_quantity", "below_zero_quantity",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",

@@ -354,6 +354,16 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "按修约前的测量结果判定（{items}）：以修约前的值及其 U 所得的接受区间"
                               "衡量，该值超出接受限，而修约到所给位数的打印数值未超出；给出较严格"
                               "的结论（ILAC-G8:09/2019 依据测量结果判定）。"},
+    "c_skewed_note": {"en": "{items}: a standard deviation decided on its estimate s as "
+                            "printed (or on its interval), whose probability of conformance "
+                            "lies on the other side of 50 % from its outcome: σ's χ² "
+                            "distribution about s is skewed, its median above s, so s at or "
+                            "just below a limit passes with p_c under 50 %; a guard band "
+                            "(r ≥ 1) decides on the interval's upper end instead.",
+                      "zh": "{items}：按所印估计值 s（或其区间）判定的标准差，其符合概率与判定结论"
+                            "位于 50 % 的两侧：σ 关于 s 的 χ² 分布是偏斜的，其中位数高于 s，故 s "
+                            "等于或略低于限值时判为合格而 p_c 低于 50 %；保护带（r ≥ 1）则按区间"
+                            "上端判定。"},
     "c_guard_w": {"en": "Guard band w", "zh": "保护带 w"},
     "c_band_two": {"en": "{lo} at the lower limit, {hi} at the upper",
                    "zh": "下限处 {lo}，上限处 {hi}"},

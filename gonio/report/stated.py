@@ -367,6 +367,27 @@ def measured_note(decided, L: dict, name_of, unit_of=None) -> str:
     return L["c_measured_note"].format(items="; ".join(parts))
 
 
+def skewed_note(decided, L: dict, name_of) -> str:
+    """The note under a conformity table for the items decided under a χ² model whose
+    probability of conformance lies on the other side of 50 % from their outcome (a pass with
+    p_c < 50 %, a fail with p_c > 50 %): σ's distribution about the estimate s is skewed (its
+    median lies above s), and the outcome is decided on s as printed (simple acceptance) or on
+    the interval, not on p_c. "" where there is none. ``decided``: (key, conformity) pairs
+    (dicts or Conformity)."""
+    def of(c, name):
+        return c.get(name) if isinstance(c, dict) else getattr(c, name, None)
+
+    names = []
+    for k, c in decided:
+        pc, model = (of(c, "conformance_probability"), str(of(c, "probability_model") or "")) \
+            if c else (None, "")
+        if pc is None or not model.startswith("chi-square") or of(c, "accepted") is None:
+            continue
+        if (of(c, "accepted") and pc < 0.5) or (not of(c, "accepted") and pc > 0.5):
+            names.append(name_of(k))
+    return L["c_skewed_note"].format(items="; ".join(names)) if names else ""
+
+
 def c_outcome(c):
     """A decision's outcome (a Conformity or its results.json dict), None where none."""
     return c.get("outcome") if isinstance(c, dict) else getattr(c, "outcome", None)
@@ -489,7 +510,7 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
                                 L["c_pc"], L["c_pfa"]], rows),
                      {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))
     for note in (no_probability_note(decided, L, name_of),
-                 measured_note(decided, L, name_of, unit_of)):
+                 measured_note(decided, L, name_of, unit_of), skewed_note(decided, L, name_of)):
         if note:
             out.append(block("p", [note], None))
     sources = list(dict.fromkeys(c.get("source") or "—" for _, c in decided

@@ -38,6 +38,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
                               label_translator, labels, measured_note, meta_text, no_probability_note, num,
+                              skewed_note,
                               opening_blocks,
                               reason_text, render_html,
                               render_pdf_figures, rule_at_U, signature_blocks)
@@ -373,7 +374,8 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
         pairs = [(e["item"], e["conformity"]) for e in conf]
         for note in (no_probability_note(pairs, L, lambda k: L[k], with_pc=False),  # no column
-                     measured_note(pairs, L, lambda k: L[k])):
+                     measured_note(pairs, L, lambda k: L[k]),
+                     skewed_note(pairs, L, lambda k: L[k])):
             if note:
                 add("p", [note])
 
