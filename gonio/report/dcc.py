@@ -337,11 +337,14 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
                       ("upper specification limit", c.get("upper"))):
             if v is not None:
                 quantity(data, nm, repr(float(v) * factor), "", dsi=dsi)
-        for nm, v in (("probability of conformance", c.get("conformance_probability")),
-                      ("specific false-accept probability", c.get("false_accept_probability")),
-                      ("specific false-reject probability", c.get("false_reject_probability"))):
+        # the digits the certificate prints (conformity_texts: p_c and the false-reject
+        # probability three significant, the false-accept two)
+        for nm, v, rule in (
+                ("probability of conformance", c.get("conformance_probability"), "sig3"),
+                ("specific false-accept probability", c.get("false_accept_probability"), "sig2"),
+                ("specific false-reject probability", c.get("false_reject_probability"), "sig3")):
             if v is not None:
-                quantity(data, nm, display("sig3", v), "one")
+                quantity(data, nm, display(rule, v), "one")
 
 
 def band_unit(item: dict) -> str:

@@ -104,12 +104,14 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                           ("upper specification limit", c.upper)):
                 if v is not None:
                     quantity(data, nm, display(_limit_rule(c), v), unit)
-            if c.false_accept_probability is not None:
-                quantity(data, "specific false-accept probability",
-                          display("sig2", c.false_accept_probability), "one")
-            elif c.false_reject_probability is not None:
-                quantity(data, "specific false-reject probability",
-                          display("sig2", c.false_reject_probability), "one")
+            # the digits the certificate prints (conformity_texts: p_c and the false-reject
+            # probability three significant, the false-accept two)
+            for nm, v, rule in (
+                    ("probability of conformance", c.conformance_probability, "sig3"),
+                    ("specific false-accept probability", c.false_accept_probability, "sig2"),
+                    ("specific false-reject probability", c.false_reject_probability, "sig3")):
+                if v is not None:
+                    quantity(data, nm, display(rule, v), "one")
             # neither: no probability model (an extreme of several points), none stated
 
     stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
