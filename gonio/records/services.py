@@ -2493,8 +2493,8 @@ def seal_of(content: dict) -> str:
 
 def sealed_content(store, cal_id: int) -> dict:
     """What the seal of a calibration's stored result covers (``files``: name → SHA-256;
-    ``items``; the register entry used). The content hash of a calibration's stored result, which the reviewer and the
-    approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
+    ``items``; the register entry used). The seal, the content hash of a calibration's
+    stored result, which the reviewer and the approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
     digests (results.json, summary, draft certificate) and every result row (key, title,
     clause, unit, measured, value, U, k), and where the calibration used an entry of the
     register of table calibrations that entry (id, standard, SHA-256, valid from, due on:
