@@ -41,6 +41,8 @@ The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data
                                 bound alone: [0, upper], no si:value),
                                 :func:`nu_quantity` (the ν of an item stated by a χ²
                                 interval, beside its quantity),
+                                :func:`probability_quantities` (a conformity statement's
+                                probabilities at the certificate's digits),
                                 :func:`unit_dsi`, :func:`tree_bytes`,
                                 :func:`bilingual`, :func:`label_translator`,
                                 :data:`DCC_CONFORMITY`
@@ -56,7 +58,8 @@ from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, below_zero_qu
                               element, environment_conditions, influence_conditions,
                               interval_quantity, label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
-                              nu_quantity, quantity, text_element, tree_bytes, unit_dsi)
+                              nu_quantity, probability_quantities, quantity, text_element,
+                              tree_bytes, unit_dsi)
 from gonio.report.figures import (HTML_FIGSIZE, empty_panel, figure_svg, legend_above,
                                   mpl_style, plain_axes, plain_log_ticks)
 from gonio.report.header import (certificate_id, condition_text, conformity_section,
@@ -87,7 +90,7 @@ __all__ = [
     "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
-    "nu_quantity", "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks",
+    "nu_quantity", "probability_quantities", "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks",
     "quantity",
     "reason_text", "render_html", "render_pdf", "render_pdf_figures", "rule_at_U",
     "signature_blocks", "text_element", "tree_bytes", "unit_dsi",

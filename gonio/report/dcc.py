@@ -7,7 +7,8 @@ Contents
 :func:`unit_dsi`           results.json unit → D-SI unit string (the one unit table)
 :func:`dsi_decimal`        a displayed number ("4.36×10⁻⁵", "±0.15") → an si:decimal ("4.36e-5")
 :func:`element`, :func:`text_element`, :func:`real`, :func:`quantity`, :func:`list_quantity`,
-:func:`not_measured_quantity`, :func:`nu_quantity`  the shared builders (also used by
+:func:`not_measured_quantity`, :func:`nu_quantity`, :func:`probability_quantities`  the
+                           shared builders (also used by
                            :mod:`gonio.report.rate_dcc`)
 :func:`new_document`, :func:`administrative_data`, :func:`measurement_result`,
 :func:`influence_conditions`, :func:`tree_bytes`  the shared document parts
@@ -247,6 +248,18 @@ def interval_quantity(d, name: str, ends, dsi: str, p: float, what: str,
     element(rl, "si:unitXMLList", f"{dsi} {dsi}")
 
 
+def probability_quantities(data, p_c, false_accept, false_reject) -> None:
+    """A conformity statement's probabilities as quantities of its ``data`` (unit one), at the
+    digits the certificate prints them (:func:`gonio.report.stated.conformity_texts`: the
+    probability of conformance and the false-reject probability three significant digits,
+    the false-accept two); None writes nothing."""
+    for nm, v, rule in (("probability of conformance", p_c, "sig3"),
+                        ("specific false-accept probability", false_accept, "sig2"),
+                        ("specific false-reject probability", false_reject, "sig3")):
+        if v is not None:
+            quantity(data, nm, display(rule, v), "one")
+
+
 #: What an item's degrees-of-freedom quantity is, in the DCC's words (:func:`nu_quantity`)
 CHI2_NU = "degrees of freedom ν its chi-square interval was computed with"
 
@@ -337,14 +350,9 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
                       ("upper specification limit", c.get("upper"))):
             if v is not None:
                 quantity(data, nm, repr(float(v) * factor), "", dsi=dsi)
-        # the digits the certificate prints (conformity_texts: p_c and the false-reject
-        # probability three significant, the false-accept two)
-        for nm, v, rule in (
-                ("probability of conformance", c.get("conformance_probability"), "sig3"),
-                ("specific false-accept probability", c.get("false_accept_probability"), "sig2"),
-                ("specific false-reject probability", c.get("false_reject_probability"), "sig3")):
-            if v is not None:
-                quantity(data, nm, display(rule, v), "one")
+        probability_quantities(data, c.get("conformance_probability"),
+                               c.get("false_accept_probability"),
+                               c.get("false_reject_probability"))
 
 
 def band_unit(item: dict) -> str:

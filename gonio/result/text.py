@@ -85,12 +85,22 @@ def conformance_clause(c) -> str:
     """", probability of conformance 98.5 %" (3 significant digits, the certificate's column),
     or "" where a decision states none: the one text every summary.txt line takes.
 
+    Three significant digits with their trailing zeros, as the certificate prints them
+    ("95.0 %", never "95 %").
+
     >>> from types import SimpleNamespace
     >>> conformance_clause(SimpleNamespace(conformance_probability=0.98533))
     ', probability of conformance 98.5 %'
+    >>> conformance_clause(SimpleNamespace(conformance_probability=0.95))
+    ', probability of conformance 95.0 %'
+    >>> conformance_clause(SimpleNamespace(conformance_probability=0.99996))
+    ', probability of conformance 100 %'
     """
     p = c.conformance_probability
-    return "" if p is None else f", probability of conformance {100 * p:.3g} %"
+    if p is None:
+        return ""
+    t = f"{100 * p:#.3g}"
+    return f", probability of conformance {t[:-1] if t.endswith('.') else t} %"
 
 
 def conformity_text(c) -> str:

@@ -179,7 +179,7 @@ def hostile_conformity(value: str):
     escaped like the rest, whatever the stored result says."""
     fields = ("key", "title", "limits", "acceptance", "guard_band", "outcome", "pc", "pfa")
 
-    def conformity_of(doc, lang="en"):
+    def conformity_of(doc, lang="en", titles=None):
         return {"rules": [value], "rows": [dict.fromkeys(fields, value)], "notes": [value]}
     return conformity_of
 

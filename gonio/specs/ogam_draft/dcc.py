@@ -28,8 +28,8 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data, below_ze
                               environment_conditions, influence_conditions, interval_quantity,
                               labels, list_quantity,
                               measurement_result, new_document,
-                              not_measured_quantity, nu_quantity, num, quantity, text_element,
-                              tree_bytes, unit_dsi)
+                              not_measured_quantity, nu_quantity, num, probability_quantities,
+                              quantity, text_element, tree_bytes, unit_dsi)
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (band_note, combined_k_note, conformity_for, e_budget,
                                            e_u_c_certified,
@@ -104,15 +104,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                           ("upper specification limit", c.upper)):
                 if v is not None:
                     quantity(data, nm, display(_limit_rule(c), v), unit)
-            # the digits the certificate prints (conformity_texts: p_c and the false-reject
-            # probability three significant, the false-accept two)
-            for nm, v, rule in (
-                    ("probability of conformance", c.conformance_probability, "sig3"),
-                    ("specific false-accept probability", c.false_accept_probability, "sig2"),
-                    ("specific false-reject probability", c.false_reject_probability, "sig3")):
-                if v is not None:
-                    quantity(data, nm, display(rule, v), "one")
-            # neither: no probability model (an extreme of several points), none stated
+            probability_quantities(data, c.conformance_probability,   # none: no model
+                                   c.false_accept_probability, c.false_reject_probability)
 
     stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
                                       "identifier": "", "accuracy": (
