@@ -600,7 +600,9 @@ def managing_admin(store, name: str | None, command: str):
 def check_first_user(roles: str) -> None:
     """The first user of a new database, created without a login, is its administrator: a
     GonioError (one line) where ``roles`` lacks admin."""
-    if "admin" not in roles.replace(",", " ").split():
+    from gonio.records.auth import check_roles
+
+    if "admin" not in check_roles(roles.replace(",", " ")).split():
         raise GonioError("the records hold no user yet: the first is their administrator "
                          "(give --roles admin, with technician or reviewer as well if the "
                          "same person does those); the administrator then creates the "

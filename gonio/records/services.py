@@ -2397,9 +2397,7 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
     those who changed one of its standards' details since (an ``update`` of the standard),
     or corrected one since the certificate it replaces was issued (a correction reaches the
     amendment, :func:`amended_standards`)."""
-    asked = s.scalar(select(func.max(AuditEvent.id)).where(
-        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
-        AuditEvent.entity_id == str(int(cal_id))))
+    asked = _event_id(s, "amend", "calibration", cal_id)
     if asked is None:
         return set()
     used = [str(i) for i in s.scalars(select(CalibrationStandard.standard_id).where(
