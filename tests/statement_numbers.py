@@ -12,6 +12,8 @@ import re
 
 import pytest
 
+from gonio.result.statement import chi2_stated_nu
+
 
 def by_interval(it: dict) -> bool:
     """Whether the item must be stated by one interval (worked out from its numbers)."""
@@ -164,3 +166,22 @@ def expected_cell(it: dict) -> dict:
             want["upper"], ends = ends[1], ("0", ends[1])
         want["interval"] = ends
     return want
+
+
+def nu_eff_interval_items(res: dict) -> dict:
+    """Measured items whose printed statement is an interval (an upper bound: U above the
+    value of a non-negative item; or a stated interval without k) that is not χ², with a
+    ν_eff: {key: ν as stated, worked out here: the integer part (GUM G.6.4), "∞" above
+    1000 (gonio's NU_INFINITE, where k is the normal quantile)}."""
+    out = {}
+    for key, it in res["items"].items():
+        unc = it.get("uncertainty") or {}
+        nu = unc.get("nu_eff")
+        if not it.get("measured") or nu is None \
+                or chi2_stated_nu(unc.get("k_source")):
+            continue
+        upper_bound = (it.get("nonnegative") and unc.get("k") is not None
+                       and unc.get("U") is not None and unc["U"] > it["value"] >= 0)
+        if upper_bound or (unc.get("interval") is not None and unc.get("k") is None):
+            out[key] = "∞" if not math.isfinite(nu) or nu > 1000 else str(math.floor(nu))
+    return out

@@ -83,14 +83,21 @@ def test_dcc_states_the_nu_of_each_chi2_interval(shared_demo, dcc_schema, spec, 
 
 
 def test_an_item_stated_otherwise_has_no_nu_quantity(shared_demo):
-    """Only a χ² interval's ν is written so: an item stated by value ± U (its k in
-    si:coverageFactor) or by another interval has none."""
+    """Only the ν printed beside an interval is written so: a χ² interval's ν, or the ν_eff
+    of another interval's coverage factor (named so: tests/test_interval_nu_everywhere.py);
+    an item stated by value ± U (its k in si:coverageFactor) or by an interval no ν defines
+    has none."""
+    from tests.statement_numbers import nu_eff_interval_items
+
     _, res, root, _ = _demo(shared_demo, "jjf1535-2015", None)
     chi = chi2_items(res)
+    other = nu_eff_interval_items(res)
     for q in root.iter(f"{{{DCC_NS}}}quantity"):
         if q.get("refType") == "gonio_degreesOfFreedom":
             key = q.getparent().getparent().get("id").removeprefix("result-")
-            assert key in chi, key
+            name = "".join(q.find("dcc:name", NS).itertext())
+            assert key in chi or key in other, key
+            assert ("chi-square" in name) == (key in chi), (key, name)
 
 
 def test_the_nu_quantity_is_named_in_chinese():

@@ -134,10 +134,12 @@ def result_texts(doc, lang: str, stated: dict | None = None) -> dict:
 
 def statement_line(st, item: dict | None, key: str, lang: str = "en") -> str:
     """An item's statement ``st`` on one line as the records' pages print it: its text in
-    ``lang``, and for an item stated by a χ² interval (a standard deviation's, a
-    dispersion's bound-condition limit) the ν that interval was computed with, as the
-    certificate's ν column and summary.txt print it ("; ν = 94"): the one rule's
-    (:func:`gonio.report.stated.item_nums`, ``chi2_nu``), never computed here.
+    ``lang``, and for an item stated by its interval the ν the certificate's ν_eff column
+    and summary.txt print beside it: "; ν = 94" for a χ² interval (a standard deviation's,
+    a dispersion's bound-condition limit), "; ν_eff = 7" for another whose coverage factor
+    came from a ν_eff (a bound-condition interval value ± (a + k·u), a non-negative item's
+    upper bound): the one rule's (:func:`gonio.report.stated.item_nums`, ``interval_nu``;
+    :func:`gonio.result.statement.interval_nu_symbol`), never computed here.
 
     >>> from gonio.result.statement import item_statement
     >>> it = {"value": 0.2288, "unit": "°/h", "measured": True, "nonnegative": True,
@@ -147,20 +149,27 @@ def statement_line(st, item: dict | None, key: str, lang: str = "en") -> str:
     '0.229 °/h; upper bound: ≤ 0.273 °/h (interval [0, 0.273], p = 95 %); ν = 94'
     >>> statement_line(item_statement(it), it, "B_s", "zh")[-9:]
     '%）；ν = 94'
+    >>> it = {"value": 20.0, "unit": "s", "measured": True, "nonnegative": True,
+    ...       "uncertainty": {"U": 32.35, "k": 2.3646, "nu_eff": 7.005,
+    ...                       "coverage_probability": 0.95, "k_source": "welch-satterthwaite"}}
+    >>> statement_line(item_statement(it), it, "warmup_time")
+    '20 s; upper bound: ≤ 53 s (interval [0, 53], p = 95 %); ν_eff = 7'
     """
     text = st.text(lang)
     if not isinstance(item, dict) or st.interval is None:
         return text
     from gonio.errors import GonioError
     from gonio.report.stated import item_nums
+    from gonio.result.statement import interval_nu_symbol
 
     try:
-        nu = item_nums(item, f"items.{key}")["chi2_nu"]
+        nu = item_nums(item, f"items.{key}")["interval_nu"]
     except (GonioError, TypeError, ValueError):
         return text
     if nu is None:
         return text
-    return f"{text}{'；' if lang == 'zh' else '; '}ν = {nu}"
+    symbol = interval_nu_symbol((item.get("uncertainty") or {}).get("k_source"))
+    return f"{text}{'；' if lang == 'zh' else '; '}{symbol} = {nu}"
 
 
 def calibration_page(store, cal_id: int, lang: str = "en") -> dict | None:

@@ -264,18 +264,29 @@ def probability_quantities(data, p_c, false_accept, false_reject) -> None:
 CHI2_NU = "degrees of freedom ν its chi-square interval was computed with"
 
 
-def nu_quantity(d, name: str, nu: Num | None) -> None:
-    """The ν of an item stated by a χ² interval (a standard deviation's, a dispersion's
-    bound-condition limit), as its certificate prints it beside that interval: a dcc:quantity
-    after the item's own (refType ``gonio_degreesOfFreedom``, :data:`CHI2_NU` in its name)
-    holding ν as an si:real in the unit one, its path in results.json and its rule
-    ("nuchi2") in the comment before it, as every stated number. si:coverageIntervalMU and
-    the ends' list have no place for it, and without it the interval's upper end cannot be
-    computed again (s·√(ν/χ²_{1−p}(ν))). ``nu``: :func:`gonio.report.stated.item_nums`'s
-    ``chi2_nu``; None writes nothing."""
-    if nu is None:
+#: ... of an item stated by another interval whose coverage factor came from a ν_eff (a
+#: bound-condition interval value ± (a + k·u), a non-negative item's upper bound value + U)
+INTERVAL_NU_EFF = ("effective degrees of freedom ν_eff its interval's coverage factor was "
+                   "computed with")
+
+
+def nu_quantity(d, name: str, nu: Num | None, chi2: bool = True) -> None:
+    """The ν of an item stated by its interval, as its certificate prints it beside that
+    interval (the ν_eff column): a dcc:quantity after the item's own (refType
+    ``gonio_degreesOfFreedom``) holding ν as an si:real in the unit one, its path in
+    results.json and its rule ("nuchi2", "nu") in the comment before it, as every stated
+    number. ``chi2``: a χ² interval's ν (a standard deviation's, a dispersion's
+    bound-condition limit; :data:`CHI2_NU` in its name), without which the interval's upper
+    end cannot be computed again (s·√(ν/χ²_{1−p}(ν))); else the ν_eff of the coverage
+    factor of a bound-condition interval or an upper bound (:data:`INTERVAL_NU_EFF`).
+    si:coverageIntervalMU and the ends' list have no place for it. ``nu``:
+    :func:`gonio.report.stated.item_nums`'s ``interval_nu`` (or ``chi2_nu``); None writes
+    nothing, nor does a ν_eff stated "∞" (no si:real holds it: the normal k, as an item
+    stated value ± U with ν_eff ∞ writes none either)."""
+    if nu is None or str(nu) == "∞":
         return
-    quantity(d, f"{name}: {CHI2_NU}", nu, "one", ref_type="gonio_degreesOfFreedom")
+    quantity(d, f"{name}: {CHI2_NU if chi2 else INTERVAL_NU_EFF}", nu, "one",
+             ref_type="gonio_degreesOfFreedom")
 
 
 def stated_p(p) -> str:

@@ -830,6 +830,9 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     # the ν of an item stated by a χ² interval (gonio.report.dcc.CHI2_NU, nu_quantity)
     (r"(.+): degrees of freedom ν its chi-square interval was computed with",
      "{1}：其 χ² 区间计算所用的自由度 ν"),
+    # ... and of an item stated by another interval (gonio.report.dcc.INTERVAL_NU_EFF)
+    (r"(.+): effective degrees of freedom ν_eff its interval's coverage factor was computed "
+     r"with", "{1}：其区间的包含因子计算所用的有效自由度 ν_eff"),
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     # the parts of a per-item DCC's method after the specification's title ("<title>;
     # protocol …; readings <file> (SHA-256 …, n rows)": its bracket and each part translated

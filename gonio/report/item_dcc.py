@@ -133,13 +133,15 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             # its upper bound alone: the interval [0, upper], no si:value
             below_zero_quantity(d, name, n["interval"]["ends"], dsi, float(p),
                                 description=st.text())
+            nu_quantity(d, name, n["interval_nu"], n["chi2_nu"] is not None)
             continue
         quantity(d, name, n["stated_value"], "", dsi=dsi, ref_type="basic_measuredValue",
                  description=st.text() if st is not None and st.widened is not None else None,
                  **kw)
         if bound is not None:
             interval_quantity(d, name, bound, dsi, float(p), bound_interval_text(it))
-        nu_quantity(d, name, n["chi2_nu"])              # a χ² interval's ν, as printed
+        # the ν printed beside an interval: a χ² interval's, or its k's ν_eff
+        nu_quantity(d, name, n["interval_nu"], n["chi2_nu"] is not None)
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -206,6 +206,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if st.below_zero:          # its upper bound alone: [0, upper], no si:value
                 below_zero_quantity(data, name, n["interval"]["ends"], dsi, float(item_p(it)),
                                     description=_converted(st, it, key, factor))
+                nu_quantity(data, name, n["interval_nu"], n["chi2_nu"] is not None)
                 continue
             quantity(data, name, n["stated_value"], "", dsi=dsi,
                      note=f" factor={factor!r}" if conv else "",
@@ -215,7 +216,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if bound is not None:
                 interval_quantity(data, name, bound, dsi, float(item_p(it)),
                                   bound_interval_text(it))
-            nu_quantity(data, name, n["chi2_nu"])    # a χ² interval's ν, as printed
+            # the ν printed beside an interval: a χ² interval's, or its k's ν_eff
+            nu_quantity(data, name, n["interval_nu"], n["chi2_nu"] is not None)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

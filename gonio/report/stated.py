@@ -543,6 +543,11 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     ν that interval was computed with (``nu`` itself, rule "nuchi2"), else None: every output
     that states such an item prints it beside the interval (the certificate's ν column,
     summary.txt, the DCC, the records' pages).
+    ``interval_nu``: for every item stated by its interval the ν the certificate's ν_eff
+    column prints beside it (``nu``: ``chi2_nu``'s, or the ν_eff its coverage factor came
+    from, of a bound-condition interval value ± (a + k·u) or a non-negative item's upper
+    bound; symbol :func:`~gonio.result.statement.interval_nu_symbol`), else None: summary.txt,
+    the DCC and the records' pages state it beside the interval.
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
@@ -554,6 +559,11 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     ...                     "k_source": "chi-square", "interval": [0.0, 0.2721]}}, "items.B_s")
     >>> str(n["chi2_nu"]), n["chi2_nu"].src, n["chi2_nu"].rule, n["U"]
     ('94', 'items.B_s.uncertainty.nu_eff', 'nuchi2', None)
+    >>> n = item_nums({"value": 0.8804, "unit": "1", "measured": True, "uncertainty": {"U":
+    ...     0.0067, "k": None, "nu_eff": 6.0, "coverage_probability": 0.9545, "k_source":
+    ...     "U = a + k·u", "interval": [0.8737, 0.8871]}}, "items.M_xy")
+    >>> str(n["interval_nu"]), n["interval_nu"].rule, n["chi2_nu"]
+    ('6', 'nu', None)
     """
     from gonio.result.statement import item_statement
 
@@ -570,7 +580,8 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     st = item_statement(it, sig=sig)
     u_c = (it.get("uncertainty") or {}).get("u_c")
     out = {"statement": st, "value": None, "stated_value": None, "U": None, "k": None,
-           "nu": None, "chi2_nu": None, "p": st.p, "upper": st.upper, "interval": None}
+           "nu": None, "chi2_nu": None, "interval_nu": None, "p": st.p, "upper": st.upper,
+           "interval": None}
     if st.interval is not None:     # the DCC's coverage interval: ends and u (2 digits)
         out["interval"] = {"ends": st.interval_ends,
                            "u": None if not u_c else display_uncertainty(float(u_c))}
@@ -597,4 +608,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nuchi2" if chi2 else "nu")
         if chi2 and st.interval is not None:
             out["chi2_nu"] = out["nu"]
+        if st.interval is not None:
+            out["interval_nu"] = out["nu"]
     return out

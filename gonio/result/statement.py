@@ -1007,6 +1007,51 @@ def chi2_stated_nu(k_source) -> bool:
     """
     return k_source in (K_SOURCE_CHI2, K_SOURCE_BOUND_CHI2)
 
+
+def bound_up_text(x: float, sig: int = 2) -> str:
+    """An upper bound at ``sig`` significant digits, rounded up (never below the bound it
+    states): a false-accept bound 1 − 0.980576 = 1.94 % reads "2.0", not "1.9" (the
+    certificate's "≤ 2.0 %", summary.txt's and the DCC's).
+
+    >>> bound_up_text(1.9424), bound_up_text(5.0), bound_up_text(0.6100001)
+    ('2.0', '5.0', '0.62')
+    """
+    d = decimals_for_sig(x, sig)
+    q = Decimal(1).scaleb(-d)
+    return str(Decimal(repr(round(x, 12))).quantize(q, rounding=ROUND_CEILING))
+
+
+def interval_nu_symbol(k_source) -> str:
+    """The symbol of the ν an item stated by its interval prints beside that interval: "ν"
+    for a χ² interval (:func:`chi2_stated_nu`: the ν the interval was computed with),
+    "ν_eff" for another (the ν_eff its coverage factor was computed with: a bound-condition
+    interval value ± (a + k·u), a non-negative item's upper bound value + U), as the
+    certificate's ν_eff column prints the number.
+
+    >>> interval_nu_symbol(K_SOURCE_CHI2), interval_nu_symbol("U = a + k·u")
+    ('ν', 'ν_eff')
+    """
+    return "ν" if chi2_stated_nu(k_source) else "ν_eff"
+
+
+def interval_nu_clause(st: "Statement", k_source) -> str:
+    """"ν = 94" or "ν_eff = 7": the ν an item stated by its interval (``st.interval``)
+    prints beside it (:func:`interval_nu_symbol`, the statement's own ν text, the
+    certificate's ν_eff column), "" where it is stated otherwise or states no ν.
+
+    >>> interval_nu_clause(state_interval(0.2288, (0.0, 0.2721), nu_eff=94.7, p=0.95,
+    ...                    nonnegative=True, chi2=True), K_SOURCE_CHI2)
+    'ν = 94'
+    >>> interval_nu_clause(state_interval(0.88, (0.8736, 0.8872), nu_eff=6.0, p=0.9545),
+    ...                    "U = a + k·u")
+    'ν_eff = 6'
+    >>> interval_nu_clause(state(5.99906, 0.00316, k=1.97414, nu_eff=58.7, p=0.95), None)
+    ''
+    """
+    if st.interval is None or st.nu_eff is None:
+        return ""
+    return f"{interval_nu_symbol(k_source)} = {st.nu_eff}"
+
 #: ``k_source`` of the largest of several standard deviations stated with the selection bias
 #: of its maximum removed (IEC 62047-20 5.1.3.7's max σ_i): its 95 % interval inverts each
 #: record's own χ² test (the upper end the largest of the records' own upper bounds, the lower

@@ -41,17 +41,17 @@ def virtual_line(res: dict) -> list[str]:
 def item_text(it) -> str:
     """``value ± U unit (k, ν_eff, p)`` of one measured item by the one statement rule
     (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers);
-    an item stated by a χ² interval (a standard deviation's, or a dispersion's bound-condition
-    limit) adds the ν that interval was computed with, "; ν = 105", as the certificate's ν
-    column prints it (never ∞: :func:`gonio.result.statement.chi2_nu`)."""
-    from gonio.result.statement import chi2_nu, chi2_stated_nu
+    an item stated by its interval adds the ν the certificate's ν_eff column prints beside
+    it (:func:`gonio.result.statement.interval_nu_clause`): "; ν = 105" for a χ² interval (a
+    standard deviation's, or a dispersion's bound-condition limit; never ∞), "; ν_eff = 7"
+    for another whose coverage factor came from a ν_eff (a bound-condition interval
+    value ± (a + k·u), a non-negative item's upper bound)."""
+    from gonio.result.statement import interval_nu_clause
 
     doc = it.to_json()
     st = item_statement(doc)                           # as results.json states it (ν_eff ∞: null)
-    unc = doc.get("uncertainty") or {}
-    nu = (chi2_nu(float(unc["nu_eff"])) if st.interval is not None and unc.get("nu_eff")
-          is not None and chi2_stated_nu(unc.get("k_source")) else None)
-    return st.text() if nu is None else f"{st.text()}; ν = {nu:g}"
+    nu = interval_nu_clause(st, (doc.get("uncertainty") or {}).get("k_source"))
+    return st.text() if not nu else f"{st.text()}; {nu}"
 
 
 def band_text(w: float) -> str:

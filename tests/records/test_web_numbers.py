@@ -30,7 +30,7 @@ from gonio.records import services
 from gonio.report.i18n import labels
 from tests.own_readings import own_text
 from tests.statement_numbers import (certificate_spans, cell_numbers, check_k, expected_cell,
-                                     measured)
+                                     measured, nu_eff_interval_items)
 
 from .conftest import PASSWORD, make_people
 
@@ -192,6 +192,7 @@ def test_web_states_the_nu_of_each_chi2_interval(recorded):
     en = page_rows(web.get(f"/calibrations/{cid}").text)
     zh = page_rows(web.get(f"/calibrations/{cid}?lang=zh").text)
     seen = set()
+    nu_eff = nu_eff_interval_items(res)
     for key, it in res["items"].items():
         unc = it.get("uncertainty") or {}
         if not it.get("measured") or key not in en:
@@ -199,6 +200,13 @@ def test_web_states_the_nu_of_each_chi2_interval(recorded):
         if unc.get("interval") is None or unc.get("k") is not None \
                 or not chi2_stated_nu(unc.get("k_source")):
             assert "ν =" not in en[key][0], (key, en[key])
+            if key in nu_eff:       # another interval: the ν_eff of its coverage factor
+                assert en[key][0].endswith(f"; ν_eff = {nu_eff[key]}"), (key, en[key])
+                assert zh[key][0].endswith(f"；ν_eff = {nu_eff[key]}"), (key, zh[key])
+                assert f"; ν_eff = {nu_eff[key]}\n" in summary, key
+                seen.add(key)
+            else:
+                assert "ν_eff =" not in en[key][0] or "±" in en[key][0], (key, en[key])
             continue
         nu = f"{chi2_nu(unc['nu_eff']):g}"
         assert nu == str(math.floor(unc["nu_eff"])), key
@@ -219,7 +227,9 @@ def test_web_states_the_nu_of_each_chi2_interval(recorded):
         assert float(dsi_decimal(hi.replace("\u2212", "-"))) >= upper * (1 - 1e-12), \
             (key, hi, upper)
     must = {"ogam-draft": {"zero_stability", "repeatability"},
-            "jjf1535-2015": {"bias_stability"}}.get(recorded["spec"], set())
+            "jjf1535-2015": {"bias_stability"},
+            "iec62047-20": {"scale_factor", "bias"},
+            "triad-alignment": {"M_xy"}}.get(recorded["spec"], set())
     assert must <= seen, (recorded["spec"], sorted(seen))
 
 
