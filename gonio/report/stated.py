@@ -30,8 +30,8 @@ from gonio.result.text import measured_clause
 from gonio.result.statement import (K_SOURCE_BOUND_CHI2, K_SOURCE_BOUND_PREFIX,  # noqa: F401
                                     K_SOURCE_CHI2, K_SOURCE_MAX_ABS, chi2_stated_nu,
                                     K_SOURCE_SELECTED_MAX, K_SOURCE_SELECTED_MAX_BEFORE,
-                                    decimals_for_sig, given_text, round_half_up,
-                                    u_c_certified)
+                                    bound_up_text, decimals_for_sig, given_text,
+                                    round_half_up, u_c_certified)
 
 
 class NoBreakText(str):
@@ -162,22 +162,6 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
             "no_p": model if g("outcome") and g("conformance_probability") is None
             and model.startswith("not given") else "",
             "measured": measured_clause(c)}
-
-
-def bound_up_text(x: float, sig: int = 2) -> str:
-    """An upper bound at ``sig`` significant digits, rounded up (never below the bound it
-    states): a false-accept bound 1 − 0.980576 = 1.94 % reads "2.0", not "1.9".
-
-    >>> bound_up_text(1.9424), bound_up_text(5.0), bound_up_text(0.6100001)
-    ('2.0', '5.0', '0.62')
-    """
-    from decimal import ROUND_CEILING, Decimal
-
-    from gonio.result.statement import decimals_for_sig
-
-    d = decimals_for_sig(x, sig)
-    q = Decimal(1).scaleb(-d)
-    return str(Decimal(repr(round(x, 12))).quantize(q, rounding=ROUND_CEILING))
 
 
 #: the kinds of interval an item can be stated by, in the legend's order

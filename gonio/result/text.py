@@ -103,6 +103,28 @@ def conformance_clause(c) -> str:
     return f", probability of conformance {t[:-1] if t.endswith('.') else t} %"
 
 
+def false_accept_bound_clause(c) -> str:
+    """"; specific false-accept probability ≤ 5.0 %": the bound an item accepted on its
+    interval under a guard band states where no probability is computed
+    (``false_accept_bound`` = 1 − p, two significant digits rounded up, as the certificate's
+    false-accept column prints it: :func:`gonio.result.statement.bound_up_text`), else "".
+
+    >>> from types import SimpleNamespace
+    >>> false_accept_bound_clause(SimpleNamespace(false_accept_bound=0.05))
+    '; specific false-accept probability ≤ 5.0 %'
+    >>> false_accept_bound_clause(SimpleNamespace(false_accept_bound=1 - 0.99305))
+    '; specific false-accept probability ≤ 0.70 %'
+    >>> false_accept_bound_clause(SimpleNamespace(false_accept_bound=None))
+    ''
+    """
+    from gonio.result.statement import bound_up_text
+
+    b = getattr(c, "false_accept_bound", None)
+    if b is None:
+        return ""
+    return f"; specific false-accept probability ≤ {bound_up_text(100.0 * float(b))} %"
+
+
 def conformity_text(c) -> str:
     """One conformity decision as a line (limits and guard bands as :func:`limits_text` and
     :func:`band_text` print them)."""
@@ -112,6 +134,7 @@ def conformity_text(c) -> str:
     pc = conformance_clause(c)
     if c.conformance_probability is None and (c.probability_model or "").startswith("not given"):
         pc = f", probability {c.probability_model}"
+    pc += false_accept_bound_clause(c)
     gb = "" if not c.guard_band else f", guard band {band_text(c.guard_band)}"
     if c.guard_band and getattr(c, "guard_band_lower", None) is not None:
         # an interval not symmetric about its value: its own reach on each side
