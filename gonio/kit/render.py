@@ -26,6 +26,8 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :func:`measured_note`, :func:`skewed_note`,
                                 :func:`condition_text`,
                                 :func:`interval_band_note`, :func:`stated_p`,
+                                :func:`pc_text` (a decision's probability of conformance
+                                as the conformity table's column prints it),
                                 :func:`declaration_parts`, :func:`interval_legend`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
                                 :func:`legend_above`, :func:`plain_axes`,
@@ -73,8 +75,8 @@ from gonio.report.render import (Block, font_families, render_html, render_pdf,
                                  render_pdf_figures)
 from gonio.report.stated import (NoBreakText, Num, conformity_texts, declaration_parts,
                                  interval_legend, item_nums, lookup, interval_band_note,
-                                 measured_note, no_probability_note, num, skewed_note,
-                                 stated_p)
+                                 measured_note, no_probability_note, num, pc_text,
+                                 skewed_note, stated_p)
 from gonio.report.text import clean_tree
 
 __all__ = [
@@ -84,6 +86,7 @@ __all__ = [
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "environment_conditions",
     "no_probability_note", "measured_note", "skewed_note", "interval_band_note", "stated_p",
+    "pc_text",
     "declaration_parts",
     "interval_legend", "interval_quantity", "below_zero_quantity",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",

@@ -283,6 +283,22 @@ def interval_legend(items: dict, L: dict) -> str:
     return L["k_iv_head"].format(kinds=("；" if zh else "; ").join(parts))
 
 
+def pc_text(c) -> str:
+    """A decision's probability of conformance as the conformity table's column prints it
+    (three significant digits with their trailing zeros, "95.0 %", as summary.txt's
+    :func:`gonio.result.text.conformance_clause` and the DCC's), "—" where none is given.
+    ``c``: a Conformity or its results.json dict.
+
+    >>> pc_text({"conformance_probability": 0.98533}), pc_text({"conformance_probability": 0.95})
+    ('98.5 %', '95.0 %')
+    >>> pc_text({"conformance_probability": None}), pc_text(None)
+    ('—', '—')
+    """
+    pc = c.get("conformance_probability") if isinstance(c, dict) else getattr(
+        c, "conformance_probability", None)
+    return "—" if pc is None else display("sig3", 100.0 * pc) + " %"
+
+
 def declaration_parts(c, t: dict) -> tuple[str, str]:
     """The acceptance and the specific false-accept probability of a DCC declaration (and
     summary line), from :func:`conformity_texts`'s ``t``: "acceptance interval [a, b]" for an
@@ -482,14 +498,13 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
                          L["c_no_statement"].format(r=c.get("reason") or "—"), "—", "—"])
             continue
         t = conformity_texts(c, None, L, bool(items[key].get("nonnegative")))
-        pc = c.get("conformance_probability")
         u = unit_of(key)
         mark = f" {L['c_default']}" if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN else ""
         rows.append([name_of(key), NoBreakText(f"{t['limits']} {u}".strip() + mark),
                      NoBreakText(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
                                  else f"{t['acceptance']} {u}".strip()),
                      t["outcome"] + (L["paren"].format(x=t["pfr"]) if t["pfr"] else ""),
-                     display("sig3", 100.0 * pc) + " %" if pc is not None else "—", t["pfa"]])
+                     pc_text(c), t["pfa"]])
     out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
                                 L["c_pc"], L["c_pfa"]], rows),
                      {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))

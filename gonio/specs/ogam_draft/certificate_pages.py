@@ -38,6 +38,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
                               label_translator, labels, measured_note, meta_text, no_probability_note, num,
+                              pc_text,
                               skewed_note,
                               opening_blocks,
                               reason_text, render_html,
@@ -363,17 +364,19 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
             unit = L.get("u_" + item_unit, item_unit)
             c = e["conformity"]
             if c is None:
-                crow.append([L[e["item"]], "—", "—", L[e["reason"]], "—"])
+                crow.append([L[e["item"]], "—", "—", L[e["reason"]], "—", "—"])
                 continue
             t = conformity_texts(c, res, L)
             out_txt = t["outcome"] + (L["paren"].format(x=t["pfr"]) if t["pfr"] else "")
             crow.append([L[e["item"]], NoBreak(f"{t['limits']} {unit}"),
                          NoBreak(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
-                                 else f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
-        add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
-                      crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
+                                 else f"{t['acceptance']} {unit}"), out_txt, pc_text(c),
+                         t["pfa"]])
+        add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pc"],
+                       L["c_pfa"]], crow),
+            {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"})
         pairs = [(e["item"], e["conformity"]) for e in conf]
-        for note in (no_probability_note(pairs, L, lambda k: L[k], with_pc=False),  # no column
+        for note in (no_probability_note(pairs, L, lambda k: L[k]),
                      measured_note(pairs, L, lambda k: L[k]),
                      skewed_note(pairs, L, lambda k: L[k])):
             if note:
