@@ -156,7 +156,9 @@ def expected_cell(it: dict) -> dict:
         want["U"] = st.U_text
     if st.k is not None:
         want["k"] = st.k
-    if st.nu_eff is not None and st.interval is None:
+    if st.nu_eff is not None and (st.interval is None or not chi2_stated_nu(
+            (it.get("uncertainty") or {}).get("k_source"))):
+        # beside U, or beside an interval that is not χ² ("; ν_eff = 7"; a χ² one's "; ν =")
         want["nu_eff"] = st.nu_eff
     if st.p is not None:
         want["p"] = st.p
