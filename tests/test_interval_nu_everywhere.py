@@ -98,3 +98,33 @@ def test_the_nu_eff_quantity_is_named_in_chinese():
 
     zh = translator({"warm-up time": "预热时间"})(f"warm-up time: {INTERVAL_NU_EFF}")
     assert zh == "预热时间：其区间的包含因子计算所用的有效自由度 ν_eff", zh
+
+
+def test_an_item_stated_by_its_upper_bound_alone_keeps_its_nu(shared_demo):
+    """An estimate fallen below zero (the warm-up time's, set to −5 s here: stated "≤ 28 s"
+    alone) keeps the ν_eff its bound's k came from in summary.txt and the DCC, as the
+    certificate's ν_eff column prints it."""
+    from gonio.report.item_outputs import summary
+    from gonio.report.rate_certificate import results_table
+    from gonio.report.rate_content import spec_content
+    from gonio.report.rate_dcc import rate_dcc_bytes
+    from gonio.report.i18n import labels
+    from gonio.result.model import Result
+
+    out = shared_demo("jjf1535-2015", seed=0)
+    doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    it = doc["items"]["warmup_time"]
+    it["value"] = -5.0
+    nu = str(math.floor(it["uncertainty"]["nu_eff"]))
+    assert nu == "7"
+    result = Result.from_json(doc)
+    line = next(ln for ln in summary(result).splitlines() if "warm-up time:" in ln)
+    assert "the estimate fell below zero" in line and line.endswith(f"; ν_eff = {nu}"), line
+    _, rows = results_table(result.to_json(), spec_content("jjf1535-2015"), labels("en"), "en")
+    row = next(r for r in rows if r[2] == "7.2.9")
+    assert str(row[6]) == nu, row
+    root = etree.fromstring(rate_dcc_bytes(result, cert_id="T"))
+    r = root.find(".//dcc:result[@id='result-warmup_time']", NS)
+    qs = [q for q in r.iterfind(".//dcc:quantity", NS)
+          if q.get("refType") == "gonio_degreesOfFreedom"]
+    assert [q.find("si:real/si:value", NS).text for q in qs] == [nu]
