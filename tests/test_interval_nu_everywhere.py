@@ -2,7 +2,8 @@
 ν_eff, states that ν_eff wherever the certificate prints it in its ν_eff column: JJF 7.2.9's
 warm-up time (its U = k·u_c with k = t_p(ν_eff) reaches below zero, so it is stated by its
 upper bound value + U; ν_eff = 7 in the demo) and the triad's bound-condition intervals
-value ± (a + k·u_rest) (M_xy, S_xy: k = t_p(ν_eff) of u_rest). summary.txt ends the line with
+value ± (a + k·u_rest) (M_xy, S_xy: k = t_p(ν_eff) of u_rest; S and L show it in their
+cross-axis table's cells). summary.txt ends the line with
 "; ν_eff = N", the DCC writes a gonio_degreesOfFreedom quantity (rule "nu") after the item's,
 and N is the certificate's span. N is worked out here from results.json (the integer part of
 its ν_eff, GUM G.6.4) and checked to be the ν the coverage factor came from with scipy's t
@@ -57,9 +58,9 @@ def test_interval_nu_eff_in_summary_dcc_and_certificate(shared_demo, spec, seed,
         shown = spans.get((key, "uncertainty.nu_eff")) or set(re.findall(
             rf'data-src="items\.{key}\.details\.bound_condition\.nu_rest"[^>]*>([^<]*)<',
             html))
-        # (the triad's S and L, ratios of M's entries, have no row in that table: no ν)
-        assert shown == {str(nu)} or (spec == "triad-alignment" and not key.startswith("M_")
-                                      and not shown), (key, shown)
+        # (the triad's S and L, ratios of M's entries, have no row in that table: their
+        # cells in the cross-axis table carry it)
+        assert shown == {str(nu)}, (key, shown)
         # summary.txt: the item's line ends with it
         line = next(ln for ln in summary.splitlines() if f"{it['title']}:" in ln
                     and ln.strip().startswith(it["clause"] or it["title"]))

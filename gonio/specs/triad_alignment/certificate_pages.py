@@ -101,8 +101,14 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     crow = []
 
     def cell(key: str) -> list:
-        """S or L by the one statement rule (its interval; or value ± U (k = …))."""
-        return _pm(res, key, with_k=True)
+        """S or L by the one statement rule (its interval with the ν_eff its coverage factor
+        came from, as summary.txt, the DCC and the records' pages state it; or value ± U
+        (k = …))."""
+        got = _pm(res, key, with_k=True)
+        it = res["items"][key]
+        nu = item_nums(it, f"items.{key}", sig=6)["interval_nu"] if it["measured"] else None
+        return got + [" (ν_eff = ", nu, ")"] if nu is not None and isinstance(got, list) \
+            else got
 
     for p in OFFDIAG:
         crow.append([f"{p[0]} ← ω_{p[1]}", cell(f"S_{p}"), cell(f"L_{p}")])
