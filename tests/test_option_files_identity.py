@@ -147,6 +147,59 @@ def test_tilt_option_identity(optical, tmp_path):
     assert any(e.startswith("tilt.json:") for e in res["provenance"]["evidence"])
 
 
+VIRTUAL_KEYS = ("bench", "seed", "noise", "generator", "instrument", "manufacturer",
+                "model", "table", "operator")
+
+
+def test_tilt_result_of_virtual_readings_stays_virtual(optical, tmp_path):
+    """A tilt result whose metadata no longer say virtual (every such key deleted) still
+    shows its source readings, the bench's: the calibration of plain readings with it is
+    virtual. One that does not show its source, or whose source was edited to say
+    non-virtual, is refused in one line naming it, exit 2, nothing written. A tilt result
+    of readings stripped of their bench lines is virtual by their watermark."""
+    readings, tilt = optical
+    d = json.loads(tilt.read_text())
+    assert d["source"]["virtual"] is True and d["source"]["file"] == "readings.csv"
+    clean = {**d, "metadata": {k: v for k, v in d["metadata"].items()
+                               if k not in VIRTUAL_KEYS}}
+    assert clean["metadata"] == {"serial": "RLG-0001", "gyro_type": "rlg"}
+    plain = without(readings, tmp_path / "r" / "readings.csv", "# bench:", "# seed:",
+                    "# generator:", "# instrument:", "# manufacturer:", "# table:",
+                    "# operator:", unmark=True)
+    (tmp_path / "clean.json").write_text(json.dumps(clean))
+    assert main(["calibrate", str(plain), "--tilt", str(tmp_path / "clean.json"), "--out",
+                 str(tmp_path / "v")]) == 0
+    res = json.loads((tmp_path / "v" / "results.json").read_text())
+    assert res["provenance"]["virtual"] is True
+    assert res["provenance"]["evidence"] == ["clean.json:source"]
+    assert "VIRTUAL BENCH" in (tmp_path / "v" / "summary.txt").read_text().splitlines()[0].upper()
+    forged = {"nosource.json": {k: v for k, v in clean.items() if k != "source"},
+              "edited.json": {**clean, "source": {**clean["source"], "virtual": False,
+                                                  "evidence": []}},
+              "moved.json": {**clean, "tilt_deg": clean["tilt_deg"] / 2}}
+    for name, doc in forged.items():
+        (tmp_path / name).write_text(json.dumps(doc))
+        before = (tmp_path / name).read_bytes()
+        rc, err = run("calibrate", plain, "--tilt", tmp_path / name, "--out", tmp_path / "o")
+        assert rc == 2 and err.count("\n") == 1 and name in err, (name, err)
+        assert "Traceback" not in err and not (tmp_path / "o").exists()
+        assert (tmp_path / name).read_bytes() == before
+    # the bench's readings without their header's marks: the source is virtual by its values
+    marked = without(readings, tmp_path / "m" / "readings.csv", "# bench:", "# seed:",
+                     "# generator:", "# instrument:", "# manufacturer:", "# table:",
+                     "# operator:")
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["tilt-estimate", str(marked), "--json"]) == 0
+    src = json.loads(buf.getvalue())["source"]
+    assert src["virtual"] is True and src["evidence"] == ["watermark"]
+    # and the laboratory's own readings give a non-virtual source
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["tilt-estimate", str(plain), "--json"]) == 0
+    assert json.loads(buf.getvalue())["source"]["virtual"] is False
+
+
 def test_the_demo_static_record_states_the_serial(shared_demo, tmp_path):
     """The optical demo's static record (named in its readings) carries the readings'
     identity, so the demo's folder calibrates again under the unstated-identity rule

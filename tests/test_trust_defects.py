@@ -352,8 +352,9 @@ def test_every_measured_item_has_the_results_json_shape(tmp_path):
 
 def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
     f, p, _ = write_case(tmp_path)
-    t = tmp_path / "tilt.json"
-    t.write_text(json.dumps({"tilt_deg": 0.02, "U95_tilt_deg": 0.01}))
+    t = tmp_path / "tilt.json"        # a tilt result shows the readings it came from
+    from gonio.formats.provenance import result_source
+    t.write_text(json.dumps(result_source(f, {"tilt_deg": 0.02, "U95_tilt_deg": 0.01})))
     code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
                              str(tmp_path / "o"), "--budget", "draft", "--tilt", str(t)],
                             capsys)

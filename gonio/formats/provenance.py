@@ -142,12 +142,82 @@ def file_provenance(path) -> dict:
     out = provenance(readings_metadata(path))
     if out["virtual"]:
         return out
+    if Path(path).suffix.lower() == ".json":     # a derived result: its source's provenance
+        src = _json_source(path)
+        if src.get("virtual") is True:
+            out = {**out, "virtual": True, "evidence": [*out["evidence"], SOURCE]}
+        return out
     from gonio.formats.watermark import detect
     wm = detect(path)
     if wm["virtual"]:
         out = {**out, "virtual": True, "evidence": [*out["evidence"], "watermark"],
                "watermark": {k: wm[k] for k in ("cells", "matching", "p_value")}}
     return out
+
+
+#: The key of a JSON result computed from readings (``gonio tilt-estimate --json``) that
+#: shows them (:func:`result_source`).
+SOURCE = "source"
+_SOURCE_KEY = b"gonio derived result source v1"
+
+
+def _source_check(doc: Mapping) -> str:
+    """The keyed digest of a derived JSON result: every key but ``metadata`` (which the
+    identity check reads and reports itself) and the check itself, in canonical JSON."""
+    import hashlib
+    import json
+    body = {k: v for k, v in doc.items() if k != "metadata"}
+    body[SOURCE] = {k: v for k, v in dict(body.get(SOURCE) or {}).items() if k != "check"}
+    text = json.dumps(body, sort_keys=True, ensure_ascii=True, allow_nan=True)
+    return hashlib.blake2b(text.encode(), key=_SOURCE_KEY, digest_size=16).hexdigest()
+
+
+def result_source(readings, doc: Mapping) -> dict:
+    """``doc`` (a result computed from ``readings``) with its ``source``: the readings' file
+    name and SHA-256, whether they are the virtual bench's (:func:`file_provenance`: their
+    metadata and their values' watermark) and the keys that said so, and a keyed ``check``
+    over the result's numbers and that source (docs/formats.md#derived-results).
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "r.csv").write_text(chr(10).join(["# seed: 3", "t,v", ""]))
+    >>> s = result_source(d / "r.csv", {"tilt_deg": 0.04})["source"]
+    >>> s["file"], s["virtual"], s["evidence"], len(s["check"])
+    ('r.csv', True, ['seed'], 32)
+    """
+    from gonio.atomic import sha256_file
+    p = file_provenance(readings)
+    out = {k: v for k, v in doc.items() if k != SOURCE}
+    out[SOURCE] = {"file": Path(readings).name, "sha256": sha256_file(readings),
+                   "virtual": bool(p["virtual"]), "evidence": list(p["evidence"])}
+    out[SOURCE]["check"] = _source_check(out)
+    return out
+
+
+def shown_source(path) -> dict:
+    """The ``source`` a derived JSON result (:func:`result_source`) shows, checked: a
+    result that does not show its readings (no ``source``, or one without their SHA-256 and
+    whether they are virtual), or whose numbers or source were changed after gonio wrote
+    them (its ``check`` does not match), is refused (GonioError naming the file).
+    Where the source says virtual, :func:`file_provenance` marks the calibration virtual."""
+    import json
+    from gonio.errors import GonioError
+    name = Path(path).name
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        doc = None
+    src = doc.get(SOURCE) if isinstance(doc, dict) else None
+    if not (isinstance(src, dict) and isinstance(src.get("virtual"), bool)
+            and re.fullmatch(r"[0-9a-f]{64}", str(src.get("sha256") or ""))):
+        raise GonioError(f"{name}: does not show the readings it was computed from (no "
+                         "'source' with their sha256 and provenance): compute it again with "
+                         "gonio from the readings (tilt-estimate --json)")
+    if src.get("check") != _source_check(doc):
+        raise GonioError(f"{name}: its numbers or its 'source' were changed after gonio wrote "
+                         "it (the source check does not match): compute it again from the "
+                         "readings")
+    return src
 
 
 def result_provenance(res: Mapping) -> dict:
@@ -163,6 +233,17 @@ def result_provenance(res: Mapping) -> dict:
                             if not given.get(k)}, "virtual": True,
                 "evidence": sorted(set(given.get("evidence") or []) | set(from_md["evidence"]))}
     return given
+
+
+def _json_source(path) -> dict:
+    """A JSON result's ``source`` object as it stands ({} where none; unchecked)."""
+    import json
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return {}
+    src = doc.get(SOURCE) if isinstance(doc, dict) else None
+    return src if isinstance(src, dict) else {}
 
 
 def metadata_evidence(prov: Mapping) -> list[str]:

@@ -185,12 +185,17 @@ def instrument_files(spec, readings, opts: dict) -> list[Path]:
     the readings name (:func:`named_files`) and those an option gives
     (:data:`INSTRUMENT_FILE_OPTIONS`: ``--thermal FILE``, ``--tilt FILE``) that exist (a
     missing one is the option's own refusal). Each goes through :func:`check_identity` and
-    :func:`mark_provenance` alike, whichever way it came."""
-    from gonio.formats.provenance import json_metadata
+    :func:`mark_provenance` alike, whichever way it came. A JSON result given so that does
+    not show the readings it was computed from, or was changed after gonio wrote it, is
+    refused (:func:`gonio.formats.provenance.shown_source`)."""
+    from gonio.formats.provenance import json_metadata, shown_source
     given = [Path(v) for k, v in sorted(opts.items()) if k in INSTRUMENT_FILE_OPTIONS
              and isinstance(v, (str, Path)) and str(v) and Path(v).is_file()]
     # a JSON file that does not parse is its reader's to refuse, in its own words
     given = [p for p in given if p.suffix.lower() != ".json" or json_metadata(p) is not None]
+    for p in given:          # a JSON result shows the readings it was computed from, or is refused
+        if p.suffix.lower() == ".json":
+            shown_source(p)
     named = named_files(spec, readings)
     return named + [p for p in given if p.resolve() not in {n.resolve() for n in named}]
 

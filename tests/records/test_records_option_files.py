@@ -28,8 +28,20 @@ from .test_web_lab_file import n_calibrations
 
 #: a tilt result states the instrument it was measured on (a file of the instrument's data
 #: that states no serial is refused: docs/formats.md, "Identity not stated")
-TILT = json.dumps({"tilt_deg": 0.02, "U95_tilt_deg": 0.01,
-                   "metadata": {"serial": "RLG-0001"}}).encode()
+#: and shows the readings it was computed from, under its check (docs/formats.md, "Derived
+#: results"): here a laboratory's readings of one line, written only to be shown
+def _tilt_bytes() -> bytes:
+    import tempfile
+
+    from gonio.formats.provenance import result_source
+    with tempfile.TemporaryDirectory() as d:
+        readings = Path(d) / "readings.csv"
+        readings.write_text("# serial: RLG-0001\ntest,time_s\n")
+        return json.dumps(result_source(readings, {"tilt_deg": 0.02, "U95_tilt_deg": 0.01,
+                                                   "metadata": {"serial": "RLG-0001"}})).encode()
+
+
+TILT = _tilt_bytes()
 NAME = "tilt estimate.json"                     # the user's name, with a space
 KEPT = f"option/tilt/{NAME}"
 SHA = hashlib.sha256(TILT).hexdigest()

@@ -278,8 +278,11 @@ def run_tilt_estimate(args) -> int:
     if args.json:
         # the readings' identity and provenance travel with the result: a calibration given
         # it (--tilt FILE) checks them as it checks its own readings'
+        # and so do the readings' file, digest and provenance (their watermark included),
+        # under a check: a result that does not show them is refused there
+        from gonio.formats.provenance import result_source
         md = {k: str(r.metadata[k]) for k in TILT_JSON_METADATA if str(r.metadata.get(k) or "")}
-        print(json.dumps({**e.to_dict(), "metadata": md}, indent=2))
+        print(json.dumps(result_source(args.file, {**e.to_dict(), "metadata": md}), indent=2))
         return 0
     print(f"in-situ tilt estimate: {e.n_positions} positions, axis {e.orientation}, "
           f"latitude {e.latitude_deg:g}°, Ω_⊥ = {e.perpendicular_arcsec_s:.4f}″/s")
