@@ -140,6 +140,16 @@ def test_jjf_programme_through_the_instruments_calibrates_like_simulate(bench, p
     readings = tmp_path / "acq" / "readings.csv"
     r = read_rate_readings(readings)
     assert r.metadata["acquisition"] == "complete" and r.metadata["spec"] == "jjf1535-2015"
+    # the served bench's readings stay virtual without every line that says so (its
+    # instruments' *_idn, its manufacturer): the times carry the bench's watermark
+    from gonio.formats.provenance import file_provenance
+    bare = tmp_path / "bare" / "readings.csv"
+    bare.parent.mkdir()
+    bare.write_text("".join(ln for ln in readings.read_text().splitlines(keepends=True)
+                            if not ln.startswith("# manufacturer:") and "_idn:" not in ln))
+    assert "virtual" not in "".join(ln for ln in bare.read_text().splitlines() if ln[:1] == "#")
+    prov = file_provenance(bare)
+    assert prov["virtual"] and prov["evidence"] == ["watermark"], prov
     assert r.metadata["serial"] == bench.gyro.serial
     assert _keys(readings) == _keys(simulated[0])
     _agree_within_u(_calibrate(readings, proto, tmp_path / "cal"), simulated[1])
@@ -271,3 +281,20 @@ def test_a_lost_link_or_an_instrument_error_stops_everything_and_keeps_the_recor
     log = (tmp_path / "a" / "io.log").read_text(encoding="utf-8").splitlines()
     assert [ln.split(" ", 1)[1] for ln in log[-3:]] == [
         "table > STOP", "supply > OUTP OFF", "chamber > OUTP OFF"]
+
+
+def test_a_laboratorys_acquisition_is_written_as_read(tmp_path):
+    """Instruments that do not say virtual: the readings are written as read, no time moved;
+    the virtual bench's (an ``*_idn`` that says so): the same rows with the bench's mark."""
+    from gonio.formats.watermark import detect
+    from gonio.instruments.run import ReadingsFile
+
+    rows = [f"bias,0,0,record,{1800 + i},{2500 + i / 100:.2f}\n" for i in range(200)]
+    cols = ("test", "run", "step", "role", "time_s", "output")
+    for name, idn, virtual in (("lab", "ACME,G-610,SN-7,1.0", False),
+                               ("virtual", "gonio,virtual rate table,x,1", True)):
+        w = ReadingsFile(tmp_path / f"{name}.csv", {"gyro_idn": idn}, rows, cols)
+        w.finish(True)
+        text = (tmp_path / f"{name}.csv").read_text()
+        assert (text.endswith("".join(rows))) is not virtual, name
+        assert detect(tmp_path / f"{name}.csv")["virtual"] is virtual, name

@@ -72,7 +72,8 @@ What it does not do
     at fewer decimals) lose it. A time of 10⁶ s or more is not marked at 1 ns by a 15-digit
     re-save (such rows count as unmarked, never as marked). Readings acquired through
     ``gonio acquire`` from the virtual bench's instruments are marked by their instruments'
-    identification, not by this watermark. Files the bench wrote before the mark moved to
+    identification and by this watermark (the acquisition's writer marks them, from that
+    identification: ``gonio.instruments.run.ReadingsFile``). Files the bench wrote before the mark moved to
     the optical times and to canonical keys are recognised by their metadata only.
 """
 

@@ -103,7 +103,9 @@ def zone_info(zone: str) -> _dt.tzinfo:
 class ReadingsFile:
     """readings.csv written as the readings come: metadata and header first, then one row per
     reading, appended, flushed and synced. ``acquisition: incomplete`` until :meth:`finish`
-    rewrites the metadata (atomically) to ``complete``."""
+    rewrites the metadata (atomically) to ``complete``. Readings of the virtual bench's
+    instruments (metadata that say virtual: their ``*_idn``) are written with the bench's
+    watermark at each rewrite (the rows appended between are marked at the next one)."""
 
     def __init__(self, path: Path, metadata: dict, rows: list[str], columns):
         self.path, self.metadata, self.rows = path, dict(metadata), list(rows)
@@ -116,7 +118,15 @@ class ReadingsFile:
         if reason:
             md["acquisition_stopped"] = " ".join(reason.split())[:300]
         head = "".join(f"# {k}: {v}\n" for k, v in md.items())
-        return head + ",".join(self.columns) + "\n" + "".join(self.rows)
+        text = head + ",".join(self.columns) + "\n" + "".join(self.rows)
+        from gonio.formats.provenance import provenance
+        if provenance(self.metadata)["virtual"]:
+            # the virtual bench's instruments (their *IDN? answers say so): their readings
+            # carry its watermark in their times, as a simulation's do, so that they stay
+            # virtual with their identification lines deleted (docs/formats.md#watermark)
+            from gonio.formats.watermark import mark_text
+            text = mark_text(text)
+        return text
 
     def _rewrite(self, state: str, reason: str = "") -> None:
         write_text(self.path, self._text(state, reason))
