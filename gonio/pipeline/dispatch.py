@@ -290,10 +290,14 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
     from gonio.formats.lab import check_no_issue_record
     check_no_issue_record(lab_d, lab if isinstance(lab, (str, Path)) else None)
     ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
+    compare = demo_identity(spec, lab_d, lab)
     own_demo = spec.output_hook("demo")
     if own_demo is not None:
+        import inspect
+        more = {"identity": compare} if "identity" in inspect.signature(own_demo).parameters \
+            else {}
         return own_demo(out, bench=bench or spec.default_bench, seed=seed, lab=lab_d,
-                        lang=lang, dcc=dcc, force=force, inputs=ins, on_stage=on_stage)
+                        lang=lang, dcc=dcc, force=force, inputs=ins, on_stage=on_stage, **more)
     if spec.simulate is None:
         raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
                          key="--spec")
@@ -306,11 +310,34 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
         say("demo: calibrating")
         result = screen_and_calibrate(spec, stage / sim["readings"].name, None)
         mark_provenance(result, stage / sim["readings"].name)
+        result.findings = list(result.findings) + compare(stage / sim["readings"].name)
         decide_conformity(result, lab_d)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)
     return result, {**sim, **paths}
+
+
+def demo_identity(spec, lab_d: dict | None, lab=None):
+    """The demo's comparison of its readings (and the files they name) with the laboratory
+    file, as :func:`calibrate` compares them (identity and conditions,
+    :func:`gonio.pipeline.identity.check_identity`): a callable taking the readings' path
+    and giving the flagged findings. A contradiction is never refused, always stated (as
+    ``[identity] on_mismatch = "proceed"``): the demo's readings are the virtual bench's,
+    made for the example, and its certificate is marked virtual; a laboratory file naming
+    another instrument then shows the contradiction on every output instead of lending the
+    bench's numbers its instrument silently. Without a laboratory file: no findings."""
+    if not lab_d:
+        return lambda readings: []
+    stated = {**lab_d, "identity": {**(lab_d.get("identity") or {}), "on_mismatch": "proceed"}}
+
+    def compare(readings) -> list:
+        return check_identity(readings, stated,
+                              lab_file=lab if isinstance(lab, (str, Path)) else None,
+                              named=named_files(spec, readings),
+                              measured=spec.measured_conditions,
+                              temperature_keys=spec.room_temperature_keys)
+    return compare
 
 
 def budget(spec_key: str, **options):

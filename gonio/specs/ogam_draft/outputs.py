@@ -245,7 +245,7 @@ def _with_static_record_file(session, stage: Path):
 
 def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: str = "en",
          dcc: bool = True, force: bool = False, inputs=(), on_stage=None,
-         protocol: str = "ogam-draft") -> tuple[Result, dict[str, Path]]:
+         protocol: str = "ogam-draft", identity=None) -> tuple[Result, dict[str, Path]]:
     """Simulate ``protocol`` on ``bench``, calibrate the readings (with the session's static
     record for the Allan analysis of 7.3, written beside them as ``static_record.csv`` and
     named by their ``# static_record:`` line, :func:`_with_static_record_file`: the folder is
@@ -258,7 +258,8 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
     existing readings.csv there is replaced only with ``force``. ``on_stage(message)``,
     if given, is told each stage as it starts (the CLI shows it on a terminal). Returns
     the result (conformity decided on ``lab``) and the paths written, by their names
-    relative to ``out``.
+    relative to ``out``. ``identity(readings)``: the findings of comparing the simulated
+    readings with the laboratory file (the pipeline's), stated with the result's.
     """
     say = on_stage or (lambda message: None)
     if isinstance(lab, (str, Path)):
@@ -276,7 +277,10 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
         session = _with_static_record_file(session, stage)
         write_session(session, out)
         say("demo: calibrating")
-        result = decide_conformity(calibrate(stage / "readings.csv", proto), lab)
+        result = calibrate(stage / "readings.csv", proto)
+        if identity is not None:
+            result.findings = list(result.findings) + identity(stage / "readings.csv")
+        result = decide_conformity(result, lab)
         write_calibration(result, out, lab=lab)
         say("demo: writing the certificate")
         write_certificate(result.to_json(), out, truth=session.truth, lab=lab, lang=lang,

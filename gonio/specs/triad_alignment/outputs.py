@@ -45,13 +45,14 @@ DEMO_MONTE_CARLO = 2000
 
 def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = "en",
          dcc: bool = False, force: bool = False, inputs=(), on_stage=None,
-         monte_carlo_trials: int = DEMO_MONTE_CARLO):
+         monte_carlo_trials: int = DEMO_MONTE_CARLO, identity=None):
     """Simulate the triad protocol on the bench (readings.csv with the alignment session,
     thermal.csv with the chamber programme, truth.json) and calibrate it with
     ``monte_carlo_trials`` Monte Carlo draws, the whole set staged and swapped into ``out``
     together (:func:`gonio.atomic.output_set`; its manifest records ``monte_carlo_trials`` as
     ``calibrate_options``, :func:`gonio.pipeline.dispatch.manifest_record`). ``lab``: a loaded
-    laboratory dict."""
+    laboratory dict. ``identity(readings)``: the findings of comparing the simulated
+    readings with it (the pipeline's), stated with the result's."""
     from gonio.specs.triad_alignment import SPEC
     from gonio.specs import decide_conformity
     from gonio.specs.triad_alignment.simulate import simulate
@@ -66,6 +67,8 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
         sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
         result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)
+        if identity is not None:
+            result.findings = list(result.findings) + identity(stage / "readings.csv")
         decide_conformity(result, lab)
         paths = write(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
     return result, {**sim, **paths}
