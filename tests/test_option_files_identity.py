@@ -172,7 +172,11 @@ def test_tilt_result_of_virtual_readings_stays_virtual(optical, tmp_path):
     res = json.loads((tmp_path / "v" / "results.json").read_text())
     assert res["provenance"]["virtual"] is True
     assert res["provenance"]["evidence"] == ["clean.json:source"]
-    assert "VIRTUAL BENCH" in (tmp_path / "v" / "summary.txt").read_text().splitlines()[0].upper()
+    first = (tmp_path / "v" / "summary.txt").read_text().splitlines()[0]
+    assert first.startswith("VIRTUAL BENCH") and "clean.json was computed from the virtual " \
+        "bench's readings" in first and "metadata" not in first, first
+    page = (tmp_path / "v" / "certificate.html").read_text(encoding="utf-8")
+    assert "clean.json, used with the readings, was computed from the virtual bench" in page
     forged = {"nosource.json": {k: v for k, v in clean.items() if k != "source"},
               "edited.json": {**clean, "source": {**clean["source"], "virtual": False,
                                                   "evidence": []}},

@@ -247,8 +247,21 @@ def _json_source(path) -> dict:
 
 
 def metadata_evidence(prov: Mapping) -> list[str]:
-    """The metadata keys among a provenance's evidence (not the values' watermark)."""
-    return [k for k in prov.get("evidence") or [] if k.rsplit(":", 1)[-1] != "watermark"]
+    """The metadata keys among a provenance's evidence (not the values' watermark, nor a
+    derived result's source, :func:`source_evidence`)."""
+    return [k for k in prov.get("evidence") or []
+            if k.rsplit(":", 1)[-1] not in ("watermark", SOURCE)]
+
+
+def source_evidence(prov: Mapping) -> list[str]:
+    """The files among a provenance's evidence that are derived results whose ``source``
+    (:func:`result_source`) says they were computed from the virtual bench's readings.
+
+    >>> source_evidence({"evidence": ["tilt.json:source", "seed", "r.csv:watermark"]})
+    ['tilt.json']
+    """
+    return [k.rsplit(":", 1)[0] for k in prov.get("evidence") or []
+            if ":" in k and k.rsplit(":", 1)[-1] == SOURCE]
 
 
 def watermark_chance(p) -> str:

@@ -155,6 +155,11 @@ LABELS: dict[str, dict[str, str]] = {
                                "file says.",
                          "zh": "读数文件的元数据（{keys}）表明其来自虚拟台架：无论实验室文件如何"
                                "填写，所有输出均如此标明。"},
+    "virtual_derived": {"en": "{files}, used with the readings, was computed from the virtual "
+                              "bench's readings (its source says so): every output says so, "
+                              "whatever the laboratory file says.",
+                        "zh": "与读数一同使用的 {files} 由虚拟台架的读数计算得出（其来源如此记载）："
+                              "无论实验室文件如何填写，所有输出均如此标明。"},
     "virtual_watermark": {"en": "The readings' own values carry the virtual bench's watermark "
                                 "({cells} cells, chance on other readings {p}): every output "
                                 "says so, whatever their header lines or the laboratory file "

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from gonio.formats.provenance import metadata_evidence, result_provenance, watermark_chance
+from gonio.formats.provenance import (metadata_evidence, result_provenance, source_evidence,
+                                      watermark_chance)
 
 
 def is_virtual(res: Mapping, lab: dict | None) -> bool:
@@ -28,6 +29,8 @@ def virtual_lines(res: Mapping, L: dict) -> list[str]:
     elif prov["virtual"] and metadata_evidence(prov):   # the bench's or seed's line deleted
         keys = ", ".join(f"# {k}" for k in metadata_evidence(prov))
         out.append(L["virtual_evidence"].format(keys=keys))
+    elif prov["virtual"] and source_evidence(prov):    # a derived result's source: the bench's
+        out.append(L["virtual_derived"].format(files=", ".join(source_evidence(prov))))
     elif prov["virtual"]:                      # every bench line deleted: the values' watermark
         wm = prov.get("watermark") or {}
         out.append(L["virtual_watermark"].format(cells=wm.get("cells", "?"),

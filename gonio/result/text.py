@@ -6,7 +6,8 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 
 from __future__ import annotations
 
-from gonio.formats.provenance import metadata_evidence, result_provenance, watermark_chance
+from gonio.formats.provenance import (metadata_evidence, result_provenance, source_evidence,
+                                      watermark_chance)
 from gonio.result.findings import identity_subjects
 from gonio.result.statement import decimals_for_sig, given_text, item_statement, round_half_up
 
@@ -16,6 +17,9 @@ VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the read
 #: ... where the bench's or the seed's line is missing: the metadata keys that say so.
 VIRTUAL_EVIDENCE_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings' "
                          "own metadata ({keys}) name the virtual bench")
+#: ... where a derived result used with them (a tilt estimate) was computed from the bench's.
+VIRTUAL_SOURCE_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: {files} was "
+                       "computed from the virtual bench's readings (its source says so)")
 #: ... where every metadata line naming the bench is missing: the values' watermark.
 VIRTUAL_WATERMARK_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings' "
                           "own values carry the virtual bench's watermark ({cells} cells, "
@@ -33,6 +37,8 @@ def virtual_line(res: dict) -> list[str]:
     keys = ", ".join(f"# {k}" for k in metadata_evidence(prov))  # the bench's line deleted
     if keys:
         return [VIRTUAL_EVIDENCE_LINE.format(keys=keys)]
+    if source_evidence(prov):                    # a derived result's source: the bench's
+        return [VIRTUAL_SOURCE_LINE.format(files=", ".join(source_evidence(prov)))]
     wm = prov.get("watermark") or {}            # every bench line deleted: the watermark
     return [VIRTUAL_WATERMARK_LINE.format(cells=wm.get("cells", "?"),
                                           p=watermark_chance(wm.get("p_value")))]
