@@ -367,7 +367,7 @@ def _parse_body(text: str, pos: int, idx: int, header: list[str], extras: list[s
         rate = np.where(np.isnan(num["rate_dps"]), DEFAULT_RATE_DPS, num["rate_dps"])
         orient, good = words("orientation", ORIENTATIONS, DEFAULT_ORIENTATION)
         ok &= good
-        ok &= ~np.isnan(num["time_s"])
+        ok &= ~np.isnan(num["time_s"]) & (num["time_s"] >= 0)
         ok &= (test == "zero_stability") | ~np.isnan(num["table_deg"])
         counts, gdeg = num["gyro_counts"], num["gyro_deg"]
         ok &= ~(np.isnan(counts) & np.isnan(gdeg))
@@ -390,7 +390,8 @@ def _parse_body(text: str, pos: int, idx: int, header: list[str], extras: list[s
             out[name][i] = rec[name]
     upto = n if first_error is None else bisect_left(line_no, first_error[0])
     dup = _first_duplicate(out, upto, line_no, fname)
-    events = [e for e in (first_error, dup,
+    order = None if dup is not None else _first_out_of_order(out, upto, line_no, fname)
+    events = [e for e in (first_error, dup, order,
                           None if structural is None else (structural.line, structural))
               if e is not None]
     if events:
@@ -452,6 +453,35 @@ def _first_duplicate(out: dict, upto: int, line_no: list[int],
         f"duplicated reading: test {t}, series {int(se)}, round {int(r)}, "
         f"rate {float(rate)} deg/s, orientation {o}{step} already on line {int(line_no[j])}",
         column="round", file=fname, line=int(line_no[i]))
+
+
+def _first_out_of_order(out: dict, upto: int, line_no: list[int],
+                        fname: str) -> tuple[int, GonioError] | None:
+    """The first 7.3 reading (``zero_stability``) among the first ``upto`` rows whose
+    ``time_s`` is not after that of the series' previous round (all its times count from
+    the one zeroing of the rest, so they increase with the round), as the error naming
+    the later line of the pair."""
+    test = np.asarray(out["test"][:upto], dtype=object)
+    at = np.flatnonzero(test == "zero_stability")
+    if at.size < 2:
+        return None
+    se, rd, t = (np.asarray(out[k][:upto], dtype=float)[at] for k in ("series", "round",
+                                                                     "time_s"))
+    order = np.lexsort((rd, se))
+    se, rd, t, at = se[order], rd[order], t[order], at[order]
+    bad = np.flatnonzero((se[1:] == se[:-1]) & (t[1:] <= t[:-1]))
+    if not bad.size:
+        return None
+    lines = [(int(line_no[at[i + 1]]), int(line_no[at[i]])) for i in bad]
+    first = min(lines, key=lambda p: max(p))
+    la, lb = max(first), min(first)
+    i = int(bad[lines.index(first)])
+    a, b = (i + 1, i) if line_no[at[i + 1]] > line_no[at[i]] else (i, i + 1)
+    return la, GonioError(
+        f"zero_stability series {int(se[i])}: round {int(rd[a])} read at time_s "
+        f"{t[a]:g} s, round {int(rd[b])} (line {lb}) at {t[b]:g} s; the rounds of a 7.3 "
+        "series count from its one zeroing, so their times must increase with the round",
+        column="time_s", file=fname, line=la)
 
 
 #: Rows above which a note says how long the run will take.
@@ -558,6 +588,9 @@ def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
         raise GonioError(f"unknown orientation {_show(orientation)}, expected one of "
                          f"{', '.join(ORIENTATIONS)}", column="orientation", **where)
     time_s = _number(row, "time_s", where, required=True)
+    if time_s < 0:
+        raise GonioError(f"time_s {_show(row['time_s'])} is before the zeroing it counts "
+                         "from; expected a time >= 0 s", column="time_s", **where)
     table_deg = _number(row, "table_deg", where, required=test != "zero_stability")
     counts = _number(row, "gyro_counts", where, required=False)
     gyro_deg = _number(row, "gyro_deg", where, required=False)
