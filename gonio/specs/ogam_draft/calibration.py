@@ -331,6 +331,11 @@ class Analysis:
         """The details of item ``c`` in results.json (its own fields beyond the Item's:
         tables listed, the 7.1 measurand, the two readings of B_s and the noise analysis)."""
         d = {k: v for k, v in c.to_dict().items() if k not in ITEM_FIELDS}
+        if d.get("scale_factor_for_angles_counts_per_deg") is not None and \
+                self.results.scale_factor_for_angles_source == "metadata":
+            # no 7.1 readings: the angles read with the metadata's nominal K, whose error
+            # is in no budget (the certificate says so beside the item)
+            d["scale_factor_for_angles_source"] = "metadata"
         if c.name == "scale_factor" and c.measured:
             iu = self.item_uncertainty.get(c.name)
             tc = None if iu is None else iu.correction
@@ -2684,7 +2689,7 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                   reference_orientation=proto.pointing_reference,
                                   **programme_conditions(proto))
     _note_exclusions(res, excluded)
-    check_counts_agree(kept, res)
+    check_counts_agree(rd, res)      # every row, those the screen set aside included
     bound_note = ""
     if tilt is None:            # a tilt file given (--tilt) states the bound itself
         settings, findings, bound_note = _tilt_bound_settings(res, kept, proto, settings,

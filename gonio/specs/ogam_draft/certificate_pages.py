@@ -300,10 +300,13 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> tuple
 
 def _beside_notes(res: dict, name: str, L: dict, U: float | None) -> list:
     """Item ``name``'s readings and notes given beside its statement and not certified, as
-    :func:`segments` joined by L["semi"]: the draft's own reading (K_l, C_v, C_g, E, the 7.1
+    :func:`segments` joined by L["semi"]: angles read with the metadata's nominal K (no
+    7.1 readings; its error in no budget), the draft's own reading (K_l, C_v, C_g, E, the 7.1
     mean uncorrected), B_s's range/T and noise model, C_v's and C_g's spread, and the
     corrections beyond the draft (tilt, table calibration). [] where there is none."""
     parts: list[list] = []
+    if detail(res, name, "scale_factor_for_angles_source") == "metadata":
+        parts.append(segments(L["note_nominal_k"]))     # first: it qualifies the value
     e_draft = (e_draft_segments(res, L)        # max|E_i| ± U of Annex A alone
                if name == "angle_deviation" and U is not None and (
                    e_by_interval(res) or e_budget(res).get("budget_kind") == "physical")

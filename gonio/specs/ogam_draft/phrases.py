@@ -448,6 +448,11 @@ LABELS: dict[str, dict[str, str]] = {
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "below_zero": {"en": "bias-corrected estimate below zero",
                    "zh": "偏差修正后的估计值低于零"},
+    "note_nominal_k": {"en": "angles read with the nominal scale factor of the readings' "
+                             "metadata (no 7.1 readings): its error is not known to this "
+                             "calibration and is not in the uncertainty",
+                       "zh": "角度按读数元数据中的标称标度因数换算（无7.1读数）：其误差本次校准未知，"
+                             "未计入不确定度"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     "fig_deviation": {"en": "Fig. 1 Angle-position deviation of every series (cf. Annex Fig. A.4)",
                       "zh": "图1 各组角位置偏差曲线（参见附录图A.4）"},
