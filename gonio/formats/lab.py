@@ -14,6 +14,7 @@ Contents
 :func:`check_symmetric`          an extreme of magnitudes takes a symmetric limit only
 :func:`check_magnitude_extremes` every limit of such an item symmetric, before any work
 :func:`check_guard_factor`       a guard band's factor r ≥ 1
+:func:`check_date_order`         received, calibrated, issued: the certificate's dates in order
 ===============================  ==========================================================
 
 The certificate renders what this file holds (ISO/IEC 17025 7.8.2.1, 7.8.4, 7.8.6); the
@@ -286,6 +287,36 @@ def check_no_issue_record(lab: dict | None, file=None) -> None:
                              file=None if file is None else str(file), key=f"record.{key}")
 
 
+#: The certificate's dates in the order they must fall (each given one on or after the
+#: one before it): the item is received, then calibrated, then the certificate issued.
+DATE_ORDER: tuple[str, ...] = ("date_of_receipt", "date_of_calibration", "date_of_issue")
+
+
+def check_date_order(certificate: dict, file=None) -> None:
+    """The ``[certificate]`` dates given in :data:`DATE_ORDER`: a certificate issued before
+    the calibration, or an item received after it was calibrated, is a GonioError naming
+    both keys and dates (an empty date is not compared).
+
+    >>> check_date_order({"date_of_receipt": "2026-11-02", "date_of_calibration": "",
+    ...                   "date_of_issue": "2026-11-20"})
+    >>> check_date_order({"date_of_calibration": "2026-11-20", "date_of_issue": "2026-11-10"},
+    ...                  "lab.toml")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: lab.toml: key certificate.date_of_issue: date_of_issue 2026-11-10 is before date_of_calibration 2026-11-20; the certificate is issued on or after the calibration
+    """
+    given = [(k, str(certificate.get(k) or "")) for k in DATE_ORDER]
+    given = [(k, v) for k, v in given if v]
+    for (ka, va), (kb, vb) in zip(given, given[1:]):
+        if _dt.date.fromisoformat(vb) < _dt.date.fromisoformat(va):
+            why = ("the certificate is issued on or after the "
+                   + ("calibration" if ka == "date_of_calibration" else "receipt")
+                   if kb == "date_of_issue" else "the item is calibrated on or after its receipt")
+            raise GonioError(f"{kb} {vb} is before {ka} {va}; {why}",
+                             file=None if file is None else str(file),
+                             key=f"certificate.{kb}")
+
+
 def load_lab(path: str | Path) -> dict:
     """Read and validate a laboratory details file (see ``protocols/lab-example.toml``).
 
@@ -311,6 +342,7 @@ def load_lab(path: str | Path) -> dict:
             lab[key] = validate_table({}, LAB_SCHEMA[key].schema, key, path)
     if lab["standards"] is None:
         lab["standards"] = []
+    check_date_order(lab["certificate"], path)
     limits = lab["specification_limits"] or []
     check_one_limit_per_item(limits, file=path)
     for i, lim in enumerate(limits):
