@@ -387,6 +387,26 @@ def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
     check_symmetric(key, bounds.lower, bounds.upper, key=where)
 
 
+def check_nonnegative_limit(key: str, item, bounds: Limits, where: str) -> None:
+    """An item that cannot be negative (``item.nonnegative``: a range, a dispersion, a noise
+    level) with an upper limit below zero: no value of it can conform, so the limit is a
+    mistake of the file (a sign, a unit), a GonioError naming the entry ``where`` and the
+    item, never a "fail" on the certificate.
+
+    >>> from gonio.result.model import Item
+    >>> it = Item("B_s", "zero stability", "7.3", "deg/h", 0.1, nonnegative=True)
+    >>> check_nonnegative_limit("B_s", it, Limits(None, 0.01), "specification_limits[0]")
+    >>> check_nonnegative_limit("B_s", it, Limits(None, -0.01), "specification_limits[0]")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[0].upper: B_s cannot be negative, so its upper limit -0.01 below zero can never be met; check the limit's sign and unit
+    """
+    if getattr(item, "nonnegative", False) and bounds.upper is not None and bounds.upper < 0:
+        raise GonioError(f"{key} cannot be negative, so its upper limit {bounds.upper:g} "
+                         "below zero can never be met; check the limit's sign and unit",
+                         key=f"{where}.upper")
+
+
 #: ``probability_model`` of an item whose U has a coverage factor from a non-normal combined
 #: distribution (JCGM 101 convolution, :func:`decide_items`): N(y, U/k) is not the
 #: distribution whose 95 % half-width is U, so no probability is given; the outcome is
@@ -849,6 +869,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
         magnitude = extreme_of_magnitudes(key, it, magnitude_extremes)
         if magnitude:
             check_symmetric_limit(key, bounds, f"{where}[{i}]")
+        check_nonnegative_limit(key, it, bounds, f"{where}[{i}]")
         unc = it.uncertainty
         if not it.measured or it.value is None:
             c = _undecided(key, bounds, rule, origin, "not measured: " + (it.reason or ""))
