@@ -41,6 +41,7 @@ def reference_parse(text: str, fname: str = "f.csv") -> pd.DataFrame:
     cols = {n: [] for n in list(R.COLUMNS) + [h for h in header if h not in R.COLUMNS]}
     cols["line"] = []
     keys = {}
+    zs: list[tuple] = []
     while idx < len(lines):
         raw = lines[idx]
         idx += 1
@@ -66,6 +67,16 @@ def reference_parse(text: str, fname: str = "f.csv") -> pd.DataFrame:
                 f"rate {key[3]} deg/s, orientation {key[4]}{step} already on line {keys[key]}",
                 column="round", **where)
         keys[key] = idx
+        if rec["test"] == "zero_stability":      # times increase with the round
+            for se_, rd_, t_, ln_ in zs:
+                if se_ == rec["series"] and ((rd_ < rec["round"] and t_ >= rec["time_s"]) or
+                                             (rd_ > rec["round"] and t_ <= rec["time_s"])):
+                    raise GonioError(
+                        f"zero_stability series {rec['series']}: round {rec['round']} read "
+                        f"at time_s {rec['time_s']:g} s, round {rd_} (line {ln_}) at {t_:g} "
+                        "s; the rounds of a 7.3 series count from its one zeroing, so their "
+                        "times must increase with the round", column="time_s", **where)
+            zs.append((rec["series"], rec["round"], rec["time_s"], idx))
         for n in R.COLUMNS:
             cols[n].append(rec[n])
         for n in cols:

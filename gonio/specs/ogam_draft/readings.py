@@ -390,7 +390,7 @@ def _parse_body(text: str, pos: int, idx: int, header: list[str], extras: list[s
             out[name][i] = rec[name]
     upto = n if first_error is None else bisect_left(line_no, first_error[0])
     dup = _first_duplicate(out, upto, line_no, fname)
-    order = None if dup is not None else _first_out_of_order(out, upto, line_no, fname)
+    order = _first_out_of_order(out, upto, line_no, fname)
     events = [e for e in (first_error, dup, order,
                           None if structural is None else (structural.line, structural))
               if e is not None]
@@ -457,31 +457,53 @@ def _first_duplicate(out: dict, upto: int, line_no: list[int],
 
 def _first_out_of_order(out: dict, upto: int, line_no: list[int],
                         fname: str) -> tuple[int, GonioError] | None:
-    """The first 7.3 reading (``zero_stability``) among the first ``upto`` rows whose
-    ``time_s`` is not after that of the series' previous round (all its times count from
-    the one zeroing of the rest, so they increase with the round), as the error naming
-    the later line of the pair."""
+    """The first 7.3 reading (``zero_stability``), in file order among the first ``upto``
+    rows, whose ``time_s`` is not after that of an earlier line's lower round of its series,
+    or not before that of an earlier line's higher round (all the times of a series count
+    from the one zeroing of the rest, so they increase with the round), as the error naming
+    it and the first such earlier line: the line a row-by-row reading stops at. Prefix
+    maxima and suffix minima over each series' rounds (Fenwick trees), O(n log n)."""
     test = np.asarray(out["test"][:upto], dtype=object)
     at = np.flatnonzero(test == "zero_stability")
     if at.size < 2:
         return None
-    se, rd, t = (np.asarray(out[k][:upto], dtype=float)[at] for k in ("series", "round",
-                                                                     "time_s"))
-    order = np.lexsort((rd, se))
-    se, rd, t, at = se[order], rd[order], t[order], at[order]
-    bad = np.flatnonzero((se[1:] == se[:-1]) & (t[1:] <= t[:-1]))
-    if not bad.size:
-        return None
-    lines = [(int(line_no[at[i + 1]]), int(line_no[at[i]])) for i in bad]
-    first = min(lines, key=lambda p: max(p))
-    la, lb = max(first), min(first)
-    i = int(bad[lines.index(first)])
-    a, b = (i + 1, i) if line_no[at[i + 1]] > line_no[at[i]] else (i, i + 1)
-    return la, GonioError(
-        f"zero_stability series {int(se[i])}: round {int(rd[a])} read at time_s "
-        f"{t[a]:g} s, round {int(rd[b])} (line {lb}) at {t[b]:g} s; the rounds of a 7.3 "
+    se = np.asarray(out["series"][:upto], dtype=float)[at]
+    rd = np.asarray(out["round"][:upto], dtype=float)[at]
+    t = np.asarray(out["time_s"][:upto], dtype=float)[at]
+    ranks = {s_: {r: i + 1 for i, r in enumerate(sorted(set(rd[se == s_].tolist())))}
+             for s_ in set(se.tolist())}
+    lo = {s_: [-np.inf] * (len(m) + 1) for s_, m in ranks.items()}   # max t, rounds ≤ k
+    hi = {s_: [np.inf] * (len(m) + 1) for s_, m in ranks.items()}    # min t, rounds ≥ k
+    for j in range(at.size):
+        m, k = ranks[se[j]], ranks[se[j]][rd[j]]
+        n, best_lo, best_hi, x = len(m), -np.inf, np.inf, k - 1
+        while x > 0:
+            best_lo, x = max(best_lo, lo[se[j]][x]), x - (x & -x)
+        x = n - k                       # rounds above k: the reversed index n - k
+        while x > 0:
+            best_hi, x = min(best_hi, hi[se[j]][x]), x - (x & -x)
+        if best_lo >= t[j] or best_hi <= t[j]:
+            return _out_of_order_error(j, se, rd, t, at, line_no, fname)
+        x = k
+        while x <= n:
+            lo[se[j]][x], x = max(lo[se[j]][x], t[j]), x + (x & -x)
+        x = n - k + 1
+        while x <= n:
+            hi[se[j]][x], x = min(hi[se[j]][x], t[j]), x + (x & -x)
+    return None
+
+
+def _out_of_order_error(j, se, rd, t, at, line_no, fname) -> tuple[int, GonioError]:
+    """The error of :func:`_first_out_of_order` for row ``j``, naming the first earlier
+    line of its series that its time contradicts."""
+    i = next(i for i in range(j) if se[i] == se[j] and (
+        (rd[i] < rd[j] and t[i] >= t[j]) or (rd[i] > rd[j] and t[i] <= t[j])))
+    line = int(line_no[at[j]])
+    return line, GonioError(
+        f"zero_stability series {int(se[j])}: round {int(rd[j])} read at time_s {t[j]:g} s, "
+        f"round {int(rd[i])} (line {int(line_no[at[i]])}) at {t[i]:g} s; the rounds of a 7.3 "
         "series count from its one zeroing, so their times must increase with the round",
-        column="time_s", file=fname, line=la)
+        column="time_s", file=fname, line=line)
 
 
 #: Rows above which a note says how long the run will take.
