@@ -40,6 +40,12 @@ Rules (one segment = the rows of one test, run and step, in time order):
   resolution: flagged once per test (its noise items hold the rounding's q/√12).
 * ``setting-departs`` with no majority — a set column with no value on more than half of a
   segment's rows (a column blank on every other row) is refused: the typos cannot be told.
+* ``sample-interval-departs`` — a record (bias, warm-up, static, temperature) whose median
+  time step departs from the protocol's sample interval by more than 1 %: refused, naming
+  the test, run and both intervals (its items are defined at the protocol's interval).
+* ``off-programme`` — a whole step (not a rest) at a rate the protocol does not plan for its
+  test and run (a rate mistyped on every row of the step): every row set aside and named;
+  the planned point it stood for is then named missing.
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -47,6 +53,7 @@ Rules (one segment = the rows of one test, run and step, in time order):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -482,10 +489,99 @@ def screen(readings, segments, clauses: dict) -> list[Finding]:
     where the bench had noise: a noise-free virtual record has none to compare with)."""
     file = None if readings.path is None else str(readings.path)
     noisy = str(readings.metadata.get("noise", "on")).strip().lower() != "off"
-    return screen_rows(readings.data, file, clauses) + sign_rule(
-        readings.data, file, clauses) + missing_points(
-        readings.data, expected_from_plan(segments), file=file, clauses=clauses) + (
+    expected = expected_from_plan(segments)
+    return interval_rule(readings.data, segments, file, clauses) + screen_rows(
+        readings.data, file, clauses) + sign_rule(readings.data, file, clauses) + \
+        off_programme_rule(readings.data, expected, file, clauses) + missing_points(
+        readings.data, expected, file=file, clauses=clauses) + (
         quantisation_rule(readings.data, file, clauses) if noisy else [])
+
+
+#: Largest relative departure of a record's median time step from the protocol's sample
+#: interval (a logger's clock; a record kept at every other sample departs by 100 %).
+INTERVAL_TOL = 0.01
+
+
+def interval_rule(df: pd.DataFrame, segments, file=None, clauses: dict | None = None
+                  ) -> list[Finding]:
+    """``sample-interval-departs``: a record (role ``record`` of the programme: the bias, warm-up,
+    static and temperature records) whose median time step departs from the protocol's sample
+    interval by more than 1 % is refused, naming the test, run and both intervals. The items
+    of a record are defined at that interval (a bias-stability block of P samples, the Allan
+    deviation's τ₀): computed at another, they are another quantity under the same name."""
+    clauses = clauses or {}
+    planned: dict = {}
+    for s in segments:
+        if s.role == "record" and s.test != "vibration":
+            planned.setdefault(s.test, set()).add(float(s.interval_s))
+    out = []
+    t_all = pd.to_numeric(df["time_s"], errors="coerce").to_numpy(dtype=float)
+    rec = (df["role"].astype(str) == "record").to_numpy()
+    groups = df[rec].groupby(["test", "run", "step"], sort=False).indices
+    where = np.flatnonzero(rec)
+    for (test, run, step), idx in groups.items():
+        want = planned.get(str(test))
+        steps = np.diff(t_all[where[idx]])
+        steps = steps[np.isfinite(steps)]
+        if not want or steps.size < 2:
+            continue
+        m = float(np.median(steps))
+        if all(abs(m - dt) > INTERVAL_TOL * dt for dt in want):
+            row = df.iloc[where[idx[0]]]
+            shown = " or ".join(f"{dt:g}" for dt in sorted(want))
+            out.append(_finding("sample-interval-departs",
+                                f"{test} run {run} step {step}: the record's median time step "
+                                f"is {m:g} s, the protocol's sample interval {shown} s "
+                                f"(±{INTERVAL_TOL:.0%})", row, "time_s", file, clauses,
+                                "median time step of a record = the protocol's sample "
+                                "interval ± 1 %"))
+            out[-1] = _refused(out[-1])
+    return out
+
+
+def _refused(f: Finding) -> Finding:
+    """The finding ``f`` with the action ``refused``."""
+    return dataclasses.replace(f, action="refused")
+
+
+#: The code of a whole segment set aside (its finding names the segment's first line).
+OFF_PROGRAMME = "off-programme"
+
+
+def off_programme_rule(df: pd.DataFrame, expected: dict, file=None,
+                       clauses: dict | None = None) -> list[Finding]:
+    """``off-programme``: a whole segment (not a rest) whose rate (its setting: the value most
+    of its rows give) is none of the rates the protocol plans for its test and run — a step
+    logged at a mistyped rate throughout — is set aside, every row of it, and named; it is
+    never fitted at a rate the programme does not have (the planned point it stood for is
+    then named missing)."""
+    clauses = clauses or {}
+    if "rate_dps" not in df:
+        return []
+    rates = {k: [v for w, v in wants if w == "rate_dps"] for k, wants in expected.items()}
+    seg = segment_values(df, ["rate_dps", "role"])
+    rel, ab = MATCH_TOL["rate_dps"]
+    bad = {}
+    for r in seg.itertuples(index=False):
+        want = rates.get((r.test, r.run))
+        if not want or str(r.role) == "rest" or not np.isfinite(float(r.rate_dps)):
+            continue
+        if not np.any(np.isclose(want, float(r.rate_dps), rtol=rel, atol=ab)):
+            bad[(r.test, r.run, r.step)] = float(r.rate_dps)
+    if not bad:
+        return []
+    out = []
+    for key, idx in df.groupby(["test", "run", "step"], sort=False).indices.items():
+        if key not in bad:
+            continue
+        row, lines = df.iloc[idx[0]], df["line"].to_numpy()[idx] if "line" in df else []
+        span = f"; {len(idx)} readings, lines {min(lines)}–{max(lines)}" if len(lines) else ""
+        out.append(_finding(OFF_PROGRAMME, f"{row['test']} run {row['run']} step {row['step']}: "
+                            f"rate {bad[key]:g} °/s is not a rate of the "
+                            f"protocol's programme{span}, all set aside", row, "rate_dps",
+                            file, clauses,
+                            "every step's rate is one the protocol plans"))
+    return out
 
 
 def screen_rows(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[Finding]:
@@ -675,16 +771,23 @@ def apply(df: pd.DataFrame, findings: list[Finding]) -> pd.DataFrame:
     lines = {f.line for f in findings if f.action == "set_aside" and f.line is not None}
     if not lines or "line" not in df:
         return df
+    whole = {f.line for f in findings if f.code == OFF_PROGRAMME and f.line is not None}
+    if whole:                      # the segment of each such line, every row of it
+        key = df.groupby(["test", "run", "step"], sort=False).ngroup()
+        lines |= set(df["line"][key.isin(set(key[df["line"].isin(whole)]))])
     return df[~df["line"].isin(lines)].reset_index(drop=True)
 
 
 def summary(findings: list[Finding]) -> str:
     """One sentence for the certificate: how many rows set aside, points missing."""
-    n_set = len({f.line for f in findings if f.action == "set_aside"})
+    n_set = len({f.line for f in findings if f.action == "set_aside" and f.code != OFF_PROGRAMME})
+    n_off = sum(f.code == OFF_PROGRAMME for f in findings)
     miss = [f for f in findings if f.code == "programme-point-missing"]
     parts = []
     if n_set:
         parts.append(f"{n_set} reading(s) set aside by the screening")
+    if n_off:
+        parts.append(f"{n_off} step(s) at a rate not in the programme set aside")
     if miss:
         parts.append(f"{len(miss)} planned point(s) missing")
     return "; ".join(parts) + ("" if not parts else " (see findings)")
