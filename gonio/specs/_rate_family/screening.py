@@ -490,9 +490,11 @@ def screen(readings, segments, clauses: dict) -> list[Finding]:
     file = None if readings.path is None else str(readings.path)
     noisy = str(readings.metadata.get("noise", "on")).strip().lower() != "off"
     expected = expected_from_plan(segments)
-    return interval_rule(readings.data, segments, file, clauses) + screen_rows(
-        readings.data, file, clauses) + sign_rule(readings.data, file, clauses) + \
-        off_programme_rule(readings.data, expected, file, clauses) + missing_points(
+    rows = screen_rows(readings.data, file, clauses)
+    aside = {f.line for f in rows if f.action == "set_aside"}
+    return interval_rule(readings.data, segments, file, clauses) + rows + sign_rule(
+        readings.data, file, clauses) + off_programme_rule(
+        readings.data, expected, file, clauses, aside) + missing_points(
         readings.data, expected, file=file, clauses=clauses) + (
         quantisation_rule(readings.data, file, clauses) if noisy else [])
 
@@ -549,12 +551,14 @@ OFF_PROGRAMME = "off-programme"
 
 
 def off_programme_rule(df: pd.DataFrame, expected: dict, file=None,
-                       clauses: dict | None = None) -> list[Finding]:
+                       clauses: dict | None = None, aside=frozenset()) -> list[Finding]:
     """``off-programme``: a whole segment (not a rest) whose rate (its setting: the value most
     of its rows give) is none of the rates the protocol plans for its test and run — a step
     logged at a mistyped rate throughout — is set aside, every row of it, and named; it is
     never fitted at a rate the programme does not have (the planned point it stood for is
-    then named missing)."""
+    then named missing). One finding per segment, naming its first line: :func:`apply` sets
+    the whole segment aside. A segment whose every row is already set aside (``aside``: its
+    lines; a reading a label typo moved into a segment of its own) is the other rule's."""
     clauses = clauses or {}
     if "rate_dps" not in df:
         return []
@@ -572,7 +576,7 @@ def off_programme_rule(df: pd.DataFrame, expected: dict, file=None,
         return []
     out = []
     for key, idx in df.groupby(["test", "run", "step"], sort=False).indices.items():
-        if key not in bad:
+        if key not in bad or ("line" in df and set(df["line"].to_numpy()[idx]) <= aside):
             continue
         row, lines = df.iloc[idx[0]], df["line"].to_numpy()[idx] if "line" in df else []
         span = f"; {len(idx)} readings, lines {min(lines)}–{max(lines)}" if len(lines) else ""
