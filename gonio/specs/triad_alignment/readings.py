@@ -192,6 +192,7 @@ def _parse_triad_readings(text: str, file: str) -> TriadReadings:
     reader = csv.reader(lines[i:])
     header = [h.strip() for h in next(reader)]
     check_header(header, REQUIRED, file=file, line=header_line)
+    check_last_row_ended(text, lines, header_line, header, file)
     unknown = [h for h in header if h not in COLUMNS]
     if unknown:
         raise GonioError(f"unknown column (known: {', '.join(COLUMNS)})", file=file,
@@ -253,6 +254,25 @@ def _parse_triad_readings(text: str, file: str) -> TriadReadings:
         df[c] = df[c].astype(float)
     check_triad_rows(df, file)
     return TriadReadings(df, meta, file)
+
+
+def check_last_row_ended(text: str, lines: list[str], header_line: int, header: list[str],
+                         file) -> None:
+    """Refuse a file whose last data row has no final newline: the file may be cut inside
+    that row's last number ('0.7732' kept as '0.77' or '0'), which has as many cells as a
+    complete row and would be read as a plausible, wrong value. The writer
+    (:func:`format_triad_readings`) ends every row with a newline; a complete row typed by
+    hand without one is refused with the remedy named."""
+    if not text or text.endswith(("\n", "\r")):
+        return
+    last = len(lines)
+    if last <= header_line or not lines[-1].strip():
+        return
+    cell = lines[-1].rsplit(",", 1)[-1].strip()
+    raise GonioError(f"the file ends inside its last row, without a final newline: it may "
+                     f"be cut short ({cell!r} may be part of a number); if the row is "
+                     "complete, end the file with a newline", file=file, line=last,
+                     column=header[-1] if header else None)
 
 
 def check_triad_rows(df: pd.DataFrame, file) -> None:
