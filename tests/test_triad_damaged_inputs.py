@@ -71,3 +71,54 @@ def test_complete_files_with_a_final_newline_still_calibrate(sim, tmp_path, caps
     d = _copy(sim, tmp_path)
     rc, _ = _calibrate(d, tmp_path, capsys)
     assert rc == 0
+
+
+def _results(tmp_path, name="out"):
+    return json.loads((tmp_path / name / "results.json").read_text(encoding="utf-8"))
+
+
+def _value(res, key):
+    return res["items"][key]["value"]
+
+
+def test_thermal_supply_typo_is_set_aside_as_a_finding(sim, tmp_path, capsys):
+    """Before: one soak row with supply_v 50 for 5 was used silently (its ± pair lost, the
+    ARW and K points moved, no finding). Now set aside with a ``setting-departs`` finding,
+    the numbers those of the same file with that row deleted."""
+    d = _copy(sim, tmp_path)
+    text = (d / "thermal.csv").read_text(encoding="utf-8")
+    i = _rows(text, "thermal")[100]
+    (d / "thermal.csv").write_text(_edit(text, i, "supply_v", "50"), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 0
+    res = _results(tmp_path)
+    f = [f for f in res["findings"] if f["code"] == "setting-departs"]
+    assert len(f) == 1 and f[0]["action"] == "set_aside" and f[0]["line"] == i + 1, f
+    assert f[0]["column"] == "supply_v" and "supply_v 50 V" in f[0]["message"]
+    assert "supply_v 50 V" in (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")
+    assert "supply_v 50 V" in (tmp_path / "out" / "certificate.html").read_text(encoding="utf-8")
+    lines = text.split("\n")
+    (d / "thermal.csv").write_text("\n".join(lines[:i] + lines[i + 1:]), encoding="utf-8")
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "del")]) == 0
+    deleted = _results(tmp_path, "del")
+    for key in ("ARW_z_t1", "K_z_t2_v1", "b_z_t2_v1"):
+        assert _value(res, key) == _value(deleted, key), key
+
+
+def test_static_record_spike_is_set_aside_as_a_finding(sim, tmp_path, capsys):
+    """Before: one out_x of 1000 (≈ 11) in the static record set the averaging time ×4 with
+    no finding. Now set aside (Hampel rule, as the rate specifications), named; the
+    averaging time is that of the undamaged record."""
+    d = _copy(sim, tmp_path)
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "ok")]) == 0
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    i = _rows(text, "static")[5000]
+    (d / "readings.csv").write_text(_edit(text, i, "out_x", "1000"), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 0
+    res, ok = _results(tmp_path), _results(tmp_path, "ok")
+    f = [f for f in res["findings"] if f["code"] == "output-outlier"]
+    assert len(f) == 1 and f[0]["action"] == "set_aside" and f[0]["line"] == i + 1, f
+    assert f[0]["column"] == "out_x"
+    assert _value(res, "averaging_time") == _value(ok, "averaging_time")
+    assert "out_x 1000" in (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")

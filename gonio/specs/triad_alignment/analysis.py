@@ -487,13 +487,29 @@ def _check_static_steps(readings: TriadReadings, rows, tau0: float) -> None:
         x = t[base: s + (1 << 16)]
         steps = np.diff(x)
         bad = np.nonzero(np.abs(steps - tau0) > 0.01 * tau0)[0]
-        if bad.size:
-            k = base + int(bad[0]) + 1           # the sample after the step
+        for b in bad:
+            k = base + int(b) + 1                # the sample after the step
             first, _, idx = rows
             pos = first + k if idx is None else int(idx[k])
+            prev = first + k - 1 if idx is None else int(idx[k - 1])
+            if _aside_gap(readings, prev, pos, float(steps[b]), tau0):
+                continue
             raise GonioError(f"static record not sampled every 1/sample_rate_hz = {tau0:g} s "
-                             f"(step {steps[bad[0]]:g} s)", file=readings.path,
+                             f"(step {steps[b]:g} s)", file=readings.path,
                              line=int(readings.data["line"].iloc[pos]), column="time_s")
+
+
+def _aside_gap(readings: TriadReadings, prev: int, pos: int, step: float, tau0: float) -> bool:
+    """Whether a step of the static record between rows ``prev`` and ``pos`` is the samples
+    the screening set aside there (every line between them set aside, the step one sample
+    more than they are, ±1 %)."""
+    if not readings.aside:
+        return False
+    line = readings.data["line"]
+    a, b = int(line.iloc[prev]), int(line.iloc[pos])
+    gone = range(a + 1, b)
+    return bool(gone) and all(x in readings.aside for x in gone) \
+        and abs(step - (len(gone) + 1) * tau0) <= 0.01 * tau0
 
 
 def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float = 0.1,

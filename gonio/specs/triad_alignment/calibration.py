@@ -841,6 +841,20 @@ def screen_files(readings, protocol=None, *, thermal=None, **_options) -> list:
     return found
 
 
+def without_set_aside(r: TriadReadings, findings) -> TriadReadings:
+    """``r`` without the rows the ``set_aside`` findings on its file name (by line), their
+    lines kept in :attr:`TriadReadings.aside`; ``r`` itself when there are none."""
+    from gonio.result.findings import set_aside
+
+    file = None if r.path is None else str(r.path)
+    mine = [f for f in findings if f.action == "set_aside" and f.file == file
+            and f.line is not None and f.line not in r.aside]
+    if not mine:
+        return r
+    return replace(r, data=set_aside(r.data, mine),
+                   aside=r.aside | frozenset(int(f.line) for f in mine))
+
+
 def refuse(findings) -> list:
     """The findings, after raising the first refused one as a GonioError naming its file and
     line (the readings stop there)."""
@@ -879,6 +893,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     screened = findings is not None
     # refused readings stop here, naming the line
     findings = refuse(findings) if screened else check(r)
+    r = without_set_aside(r, findings)
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
     al = None
@@ -900,6 +915,8 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     tr = _thermal_readings(r, thermal)
     if tr is not None and tr is not r and not screened:
         findings += check(tr)
+    if tr is not None:
+        tr = without_set_aside(tr, findings)
     th = None
     comp: dict[str, Compensation] = {}
     extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None}

@@ -93,6 +93,9 @@ class TriadReadings:
     data: pd.DataFrame
     metadata: dict = field(default_factory=dict)
     path: str | None = None
+    #: lines of the file set aside by the screening (their rows are not in ``data``): the
+    #: static record's time-step check joins the samples either side of them
+    aside: frozenset = frozenset()
 
     def rows(self, test: str) -> pd.DataFrame:
         """The rows of one kind (``alignment``, ``static``, ``thermal``), in file order."""
@@ -144,7 +147,7 @@ _PARSED_LOCK = threading.Lock()
 
 
 def _copy(r: TriadReadings) -> TriadReadings:
-    return TriadReadings(r.data.copy(deep=True), copy.deepcopy(r.metadata), r.path)
+    return TriadReadings(r.data.copy(deep=True), copy.deepcopy(r.metadata), r.path, r.aside)
 
 
 def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReadings:

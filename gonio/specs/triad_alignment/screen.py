@@ -1,9 +1,10 @@
 """Screening of triad readings: the triad specification's rules.
 
-:func:`screen` returns one :class:`gonio.result.Finding` per reading a rule fired on; every
-rule here refuses (a triad fit has no way to carry a reading it does not trust: one wrong
-dwell moves M and b for every gyro), so :func:`check` raises the first as a GonioError
-naming the line. The rules (docs/alignment.md, "Screening"):
+:func:`screen` returns one :class:`gonio.result.Finding` per reading a rule fired on. A
+rule on the alignment dwells refuses (a triad fit has no way to carry a dwell it does not
+trust: one wrong dwell moves M and b for every gyro), and :func:`check` raises the first
+refused finding as a GonioError naming the line; a thermal soak row or a static sample that
+departs is set aside instead (the calibration drops its line and states the finding). The rules (docs/alignment.md, "Screening"):
 
 - **duplicated row** — two rows of the same test with the same ``step`` (the dwell's index)
   or with identical data: a copied dwell would count twice in the fit.
@@ -23,6 +24,11 @@ naming the line. The rules (docs/alignment.md, "Screening"):
 - **one temperature** — a thermal programme whose soak rows span less than
   :data:`MIN_TEMPERATURE_SPAN_C` (chamber) cannot identify a temperature model; it was
   certified as a model before.
+- **set point departs** (set aside) — a thermal soak row whose supply, table rate or
+  chamber temperature departs from the programme the majority of the soaks hold
+  (:func:`_thermal_settings`); the calibration fits without it.
+- **static spike** (set aside) — a sample of the static record beyond the rate
+  specifications' Hampel limit (:func:`_static_outliers`); refused when more than 5 %.
 """
 
 from __future__ import annotations
@@ -184,13 +190,106 @@ def _one_sample_dwells(df: pd.DataFrame, file) -> list[Finding]:
                     rule="a static soak dwell's standard deviation needs n_samples ≥ 2")]
 
 
+#: Tolerances of the thermal programme's set points (``setting-departs``, as the rate
+#: specifications' screening): supply 0.01 V + 0.2 %, table rate 10⁻⁶ relative + 10⁻⁹ °/s,
+#: chamber temperature 1 °C from its soak's median.
+SUPPLY_TOL_V, SUPPLY_TOL_REL, RATE_TOL_REL, RATE_TOL_DPS, CHAMBER_TOL_C = \
+    0.01, 2e-3, 1e-6, 1e-9, 1.0
+
+
+def _soaks(df: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
+    """The thermal soak rows and, per row, its soak (a run of consecutive soak rows: a ramp
+    or another up axis ends it, as :func:`thermal_model.soak_points` pairs them)."""
+    th = df[df["test"].astype(str) == "thermal"]
+    block = ((th["phase"] != th["phase"].shift()) | (th["up"] != th["up"].shift())).cumsum()
+    soak = (th["phase"].astype(str) == "soak").to_numpy()
+    return th[soak], block.to_numpy()[soak]
+
+
+def _thermal_settings(df: pd.DataFrame, file) -> list[Finding]:
+    """``setting-departs`` (set aside): a soak row whose set point departs from the
+    programme. The programme is what the majority of the soaks hold: every soak runs the
+    same supply voltages and table rates, so a ``supply_v`` or ``rate_dps`` that fewer than
+    half of the soaks hold (within the tolerance) is a typo (supply 50 for 5 V was used
+    silently, its soak point lost); a ``chamber_c`` more than 1 °C from its soak's median
+    too. Needs three soaks or more (a majority)."""
+    th, blk = _soaks(df)
+    n_soaks = len(set(blk.tolist()))
+    if n_soaks < 3:
+        return []
+    out: dict[int, Finding] = {}
+    for col, rel, ab, unit in (("supply_v", SUPPLY_TOL_REL, SUPPLY_TOL_V, "V"),
+                               ("rate_dps", RATE_TOL_REL, RATE_TOL_DPS, "°/s")):
+        v = th[col].to_numpy(float)
+        tol = ab + rel * np.abs(v)
+        near = np.abs(v[:, None] - v[None, :]) <= tol[:, None]
+        held = np.array([len(set(blk[near[i]].tolist())) for i in range(v.size)])
+        for i in np.flatnonzero(2 * held <= n_soaks):
+            row = th.iloc[i]
+            out.setdefault(int(row["line"]), Finding(
+                "setting-departs", f"thermal soak step {int(row['step'])}: {col} {v[i]:.10g} "
+                f"{unit} is held by {held[i]} of the programme's {n_soaks} soaks — set aside "
+                "(the soak point it belongs to goes with it); the thermal model rests on the "
+                "other points", "set_aside", file=file,
+                line=int(row["line"]), column=col, test="thermal", clause="triad screening",
+                rule=f"a set point held by more than half of the soaks (±{ab:g} {unit} + "
+                     f"{rel:g}·|x|)"))
+    c = th["chamber_c"].to_numpy(float)
+    med = pd.Series(c).groupby(blk).transform("median").to_numpy()
+    for i in np.flatnonzero(np.abs(c - med) > CHAMBER_TOL_C):
+        row = th.iloc[i]
+        out.setdefault(int(row["line"]), Finding(
+            "setting-departs", f"thermal soak step {int(row['step'])}: chamber_c {c[i]:.10g} °C "
+            f"departs from its soak's {med[i]:.10g} °C — set aside (the soak point it belongs "
+            "to goes with it); the thermal model rests on the other points", "set_aside", file=file, line=int(row["line"]),
+            column="chamber_c", test="thermal", clause="triad screening",
+            rule=f"|chamber_c − soak median| ≤ {CHAMBER_TOL_C:g} °C"))
+    return [out[k] for k in sorted(out)]
+
+
+def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
+    """``output-outlier`` (set aside): a sample of the static record against its running
+    median, the rate specifications' Hampel rule
+    (:func:`gonio.specs._rate_family.screening.hampel_residuals`; one out_x of 1000 for ≈ 11
+    set the averaging time ×4). The Allan deviation then joins the samples either side of
+    it. More than 5 % (and ≥ 3) of the record: refused, the record is damaged."""
+    from gonio.specs._rate_family.screening import (DENSE_MIN_ROWS, DENSE_SHARE,
+                                                    HAMPEL_MIN_ROWS, hampel_residuals)
+
+    st = df[df["test"].astype(str) == "static"]
+    if len(st) < HAMPEL_MIN_ROWS:
+        return []
+    out: dict[int, Finding] = {}
+    for c in OUT:
+        y = st[c].to_numpy(float)
+        d, lim = hampel_residuals(y)
+        bad = np.flatnonzero(np.abs(d) > lim)
+        action = "set_aside"
+        if bad.size >= DENSE_MIN_ROWS and bad.size > DENSE_SHARE * y.size:
+            bad, action = bad[:1], "refused"
+        for i in bad:
+            ln = int(st["line"].iloc[i])
+            what = (f"static record: {c} {y[i]:.10g} departs from its running median by "
+                    f"{d[i]:+.4g} (limit {lim[i]:.3g})")
+            what += (" — set aside; the Allan deviation joins the samples either side"
+                     if action == "set_aside" else
+                     f"; {np.sum(np.abs(d) > lim)} of its {y.size} samples are outliers (more "
+                     f"than {DENSE_SHARE:.0%}): the record is damaged")
+            out.setdefault(ln, Finding("output-outlier", what, action, file=file, line=ln,
+                                       column=c, test="static", clause="triad screening",
+                                       rule="|y_i − running median (21)| > 8·1.4826·local "
+                                            "median |y − running median|"))
+    return [out[k] for k in sorted(out)]
+
+
 def screen(readings, protocol=None) -> list[Finding]:
     """Every finding on a triad readings file (:class:`gonio.specs.triad_alignment.readings.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
             + _one_temperature(df, file) + _step_gaps(df, file)
-            + _no_static_record(df, file) + _one_sample_dwells(df, file))
+            + _no_static_record(df, file) + _one_sample_dwells(df, file)
+            + _thermal_settings(df, file) + _static_outliers(df, file))
 
 
 def check(readings, protocol=None) -> list[Finding]:
