@@ -122,3 +122,20 @@ def test_static_record_spike_is_set_aside_as_a_finding(sim, tmp_path, capsys):
     assert f[0]["column"] == "out_x"
     assert _value(res, "averaging_time") == _value(ok, "averaging_time")
     assert "out_x 1000" in (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")
+
+
+def test_align_and_thermal_model_commands_screen_as_calibrate(sim, tmp_path, capsys):
+    """``gonio align`` and ``gonio thermal-model`` read the same files: the spike and the
+    supply typo are set aside there too and said on stderr (before: used silently)."""
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    (d / "readings.csv").write_text(_edit(text, _rows(text, "static")[5000], "out_x", "1000"),
+                                    encoding="utf-8")
+    th = (d / "thermal.csv").read_text(encoding="utf-8")
+    (d / "thermal.csv").write_text(_edit(th, _rows(th, "thermal")[100], "supply_v", "50"),
+                                   encoding="utf-8")
+    assert main(["align", str(d / "readings.csv")]) == 0
+    assert "set aside:" in capsys.readouterr().err
+    assert main(["thermal-model", str(d / "thermal.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "set aside:" in err and "supply_v 50 V" in err

@@ -71,6 +71,23 @@ def _fmt_matrix(m, u, digits=6) -> list[str]:
     return ["  ".join(f"{m[i][j]: .{digits}g} ± {u[i][j]:.2g}" for j in range(3)) for i in range(3)]
 
 
+def screened(path):
+    """The triad readings at ``path``, screened as calibrate screens them: a refused finding
+    raises (the line named), the rows set aside are dropped and each is said on stderr."""
+    import sys
+
+    from gonio.specs.triad_alignment.calibration import without_set_aside
+    from gonio.specs.triad_alignment.readings import read_triad_readings
+    from gonio.specs.triad_alignment.screen import check
+
+    r = read_triad_readings(path)
+    found = check(r)
+    for f in found:
+        if f.action == "set_aside":
+            print(f"set aside: {f.location()}: {f.message}", file=sys.stderr)
+    return without_set_aside(r, found)
+
+
 def run_align(args) -> int:
     """``gonio align``: the alignment estimate printed (or ``--json``), with the optional
     figure (``--plot``) and page (``--report``); exit code 0."""
@@ -78,7 +95,6 @@ def run_align(args) -> int:
 
     from gonio.specs.triad_alignment.analysis import cross_axis_table
     from gonio.formats.jsonsafe import json_safe
-    from gonio.specs.triad_alignment.readings import read_triad_readings
 
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
@@ -95,7 +111,7 @@ def run_align(args) -> int:
     check_output_files({"--plot": args.plot, "--report": args.report},
                        formats={"--plot": FIGURE_FORMATS},
                        inputs=[args.readings, *named_inputs(args.readings)])
-    r = read_triad_readings(args.readings)
+    r = screened(args.readings)
     res = fit_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
                         seed=args.seed, target_deg=args.target_deg)   # calibrate's call
     if not args.robust:
@@ -186,7 +202,7 @@ def run_thermal_model(args) -> int:
                        formats={"--plot": FIGURE_FORMATS},
                        inputs=inputs + [q for i in inputs if i for q in named_inputs(i)])
 
-    r = read_triad_readings(args.readings)
+    r = screened(args.readings)
     res = identify_thermal_model(r, criterion=args.criterion, temperature=args.temperature)
     comp = {}
     if args.compensate:
