@@ -139,3 +139,16 @@ def test_align_and_thermal_model_commands_screen_as_calibrate(sim, tmp_path, cap
     assert main(["thermal-model", str(d / "thermal.csv")]) == 0
     err = capsys.readouterr().err
     assert "set aside:" in err and "supply_v 50 V" in err
+
+
+def test_supply_column_off_on_many_soak_rows_is_refused(sim, tmp_path, capsys):
+    """Many soak rows off the shared set points are no typos: refused, the first named."""
+    d = _copy(sim, tmp_path)
+    text = (d / "thermal.csv").read_text(encoding="utf-8")
+    rows = [i for i in _rows(text, "thermal") if ",soak," in text.split("\n")[i]]
+    for k, i in enumerate(rows[::3][:12]):
+        text = _edit(text, i, "supply_v", f"{6.0 + 0.5 * k:g}")
+    (d / "thermal.csv").write_text(text, encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 2 and "thermal soak rows depart from the set points" in cap.err, cap.err
+    assert f"thermal.csv:{rows[0] + 1}: column supply_v" in cap.err

@@ -244,7 +244,20 @@ def _thermal_settings(df: pd.DataFrame, file) -> list[Finding]:
             "to goes with it); the thermal model rests on the other points", "set_aside", file=file, line=int(row["line"]),
             column="chamber_c", test="thermal", clause="triad screening",
             rule=f"|chamber_c − soak median| ≤ {CHAMBER_TOL_C:g} °C"))
-    return [out[k] for k in sorted(out)]
+    found = [out[k] for k in sorted(out)]
+    if len(found) > max(DEPART_MAX_ROWS, DEPART_SHARE * len(th)):
+        f = found[0]
+        return [Finding(**{**f.to_json(), "action": "refused", "message":
+                           f"{len(found)} of the {len(th)} thermal soak rows depart from the "
+                           f"set points the soaks share (the first here: {f.message}): not "
+                           "typos to set aside — the programme or its columns are not as "
+                           "the soaks state"})]
+    return found
+
+
+#: More thermal soak rows departing from the programme than this (and than this share of
+#: the soak rows) refuse the file: a column logged differently, not typos to set aside.
+DEPART_MAX_ROWS, DEPART_SHARE = 2, 0.1
 
 
 def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
