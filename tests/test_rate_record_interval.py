@@ -15,18 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from gonio.pipeline.coverage import reduced_protocol
-from gonio.pipeline.dispatch import simulate as simulate_files
-
-
-@pytest.fixture(scope="module", params=("jjf1535-2015", "iec62047-20"))
-def simulated(request, tmp_path_factory):
-    spec = request.param
-    tmp = tmp_path_factory.mktemp(spec)
-    proto = reduced_protocol(spec, tmp / "p.toml", {"arw" if spec.startswith("jjf") else "noise":
-                                                    {"samples": 3000}})
-    files = simulate_files(spec, tmp / "sim", protocol=str(proto), seed=77)
-    return spec, proto, files["readings"], tmp
+from tests.test_rate_screening import simulated  # noqa: F401  (the simulated files, both specs)
 
 
 def _split(path):
