@@ -85,7 +85,12 @@ def test_rate_dcc_states_a_below_zero_item_by_its_interval_alone(spec, shared_de
     assert st.below_zero
     root = rate_dcc_tree(Result.from_json(d), cert_id="T-1")
     res = root.find(f".//dcc:result[@id='result-{key}']", NS)
-    assert res.find(".//si:real", NS) is None and res.find(".//si:value", NS) is None, key
+    # no value of the item itself; the one si:real is the ν its interval was computed with
+    # (its own gonio_degreesOfFreedom quantity, as the certificate's ν column prints it)
+    reals = [q for q in res.iterfind(".//dcc:quantity", NS) if q.find("si:real", NS) is not None]
+    assert [q.get("refType") for q in reals] == ["gonio_degreesOfFreedom"], key
+    nu = item_nums(it, f"items.{key}")["interval_nu"]
+    assert reals[0].find("si:real/si:value", NS).text == str(nu), key
     lo, up = res.find(".//si:realListXMLList/si:valueXMLList", NS).text.split()
     assert float(lo) == 0.0 and float(up) >= hi and up == st.upper_text
     assert "upper bound alone" in res.find(".//dcc:quantity/dcc:name/dcc:content", NS).text
