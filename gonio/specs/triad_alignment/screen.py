@@ -210,8 +210,8 @@ def _thermal_settings(df: pd.DataFrame, file) -> list[Finding]:
     """``setting-departs`` (set aside): a soak row whose set point departs from the
     programme. The programme is what the majority of the soaks hold: every soak runs the
     same supply voltages and table rates, so a ``supply_v`` or ``rate_dps`` that fewer than
-    half of the soaks hold (within the tolerance) is a typo (supply 50 for 5 V was used
-    silently, its soak point lost); a ``chamber_c`` more than 1 °C from its soak's median
+    half of the soaks hold (within the tolerance) is a typo (supply 50 for 5 V: fitted, it
+    would move the soak point's K and b); a ``chamber_c`` more than 1 °C from its soak's median
     too. Needs three soaks or more (a majority)."""
     th, blk = _soaks(df)
     n_soaks = len(set(blk.tolist()))
@@ -263,8 +263,8 @@ DEPART_MAX_ROWS, DEPART_SHARE = 2, 0.1
 def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
     """``output-outlier`` (set aside): a sample of the static record against its running
     median, the rate specifications' Hampel rule
-    (:func:`gonio.specs._rate_family.screening.hampel_residuals`; one out_x of 1000 for ≈ 11
-    set the averaging time ×4). The Allan deviation then joins the samples either side of
+    (:func:`gonio.specs._rate_family.screening.hampel_residuals`: one spike of 1000 among
+    values near 11 dominates the Allan deviation the averaging time is read from). The Allan deviation then joins the samples either side of
     it. More than 5 % (and ≥ 3) of the record: refused, the record is damaged."""
     from gonio.specs._rate_family.screening import (DENSE_MIN_ROWS, DENSE_SHARE,
                                                     HAMPEL_MIN_ROWS, hampel_residuals)
