@@ -387,7 +387,7 @@ LABELS: dict[str, dict[str, str]] = {
               "w is applied to the interval's ends: each end is moved in by (r − 1)·δ, so at "
               "r = 1 the interval lies within the limits. An accepted item lies above its "
               "interval's upper end with a probability of at most 1 − p = {q} % (“≤ {q} %” "
-              "in the false-accept column where a row states it; a one-sided {p} % bound reaches that, an item stated y ± U with k "
+              "where an item states it; a one-sided {p} % bound reaches that, an item stated y ± U with k "
               "for {p} % has at most {hq} % at r = 1).",
         "zh": "以 {p} % 区间单独表述的项目（{items}）的保护带：此类项目按所印区间判定，w = r·δ，"
               "δ 取自所印端点：区间的半宽，（上端 − 下端）/2（区间即 中点 ± δ）；以单侧 χ² 上限"
@@ -395,7 +395,7 @@ LABELS: dict[str, dict[str, str]] = {
               "符合概率）。δ 代替 w = r·U 中的 U，不是该项目的扩展不确定度；该项目另给出 U 时，"
               "δ 可能与之不同（区间即该项目的 值 ± U 时亦然：所印端点向外修约）。w 施加于区间的端点：两端各向内移 (r − 1)·δ，"
               "r = 1 时区间位于规定限之内。判为合格者其被测量高于区间上端的概率至多为 "
-              "1 − p = {q} %（表中某行给出“≤ {q} %”时即此；单侧 {p} % 上限可达此值，以 y ± U（{p} % 的 k）"
+              "1 − p = {q} %（某项目给出“≤ {q} %”时即此；单侧 {p} % 上限可达此值，以 y ± U（{p} % 的 k）"
               "表述的项目在 r = 1 时至多 {hq} %）。"},
     "c_interval_band_item": {"en": "{name}: δ = ({hi} − {lo})/2 {unit} = {d} {unit}, w = {w} "
                                    "{unit}",
