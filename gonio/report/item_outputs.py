@@ -33,24 +33,23 @@ def summary(result, lab: dict | None = None) -> str:
     """The summary printed and written to ``summary.txt`` (``lab``: the laboratory file the
     certificate is issued with): the result's lines
     (:meth:`~gonio.result.model.Result.summary`) with the certificate's guard-band note
-    under its conformity decisions (:func:`with_band_note`), then the sentences that define
+    under its conformity decisions (:func:`band_notes`), then the sentences that define
     an item's measurand as the certificate states them (:func:`gonio.report.rate_content.item_conditions`,
     e.g. JJF 7.2.9's window W, block P and nominal stability)."""
-    text = with_band_note(result.summary(lab, room_temperature_keys(result.spec_key)),
-                          result.to_json())
+    res = result.to_json()
+    text = result.summary(lab, room_temperature_keys(result.spec_key), band_notes(res))
     if result.spec_key and get(result.spec_key).certificate_content:
-        conditions = item_conditions(result.to_json(), spec_content(result.spec_key))
+        conditions = item_conditions(res, spec_content(result.spec_key))
         text += "".join(f"note: {t}\n" for _, t in conditions)
     return text
 
 
-def with_band_note(text: str, res: dict) -> str:
-    """summary.txt's ``text`` with the certificate's guard-band note of the items decided on
-    their interval alone (:func:`gonio.report.stated.interval_band_note`, in English, each
-    item named and its unit written as the certificate's conformity table does: δ read off
-    the printed ends, w = r·δ, and the "≤ q %" false-accept bound 1 − p) as the last line of
-    its conformity section; ``text`` as is where no such item was decided. ``res``:
-    results.json."""
+def band_notes(res: dict) -> tuple[str, ...]:
+    """The certificate's guard-band note of the items decided on their interval alone
+    (:func:`gonio.report.stated.interval_band_note`, in English, each item named and its
+    unit written as the certificate's conformity table does: δ read off the printed ends,
+    w = r·δ, and the "≤ q %" false-accept bound 1 − p), for summary.txt's conformity
+    section; () where no such item was decided. ``res``: results.json."""
     from gonio.report.i18n import labels
     from gonio.report.stated import interval_band_note, stated_p
     from gonio.result.statement import unit_text
@@ -61,13 +60,7 @@ def with_band_note(text: str, res: dict) -> str:
     band = interval_band_note(decided, L, lambda k: items[k].get("title") or k,
                               lambda k: unit_text(items[k].get("unit")) or L["unit_one"],
                               lambda k: stated_p(items[k]))
-    lines = text.split("\n")
-    if not band or "conformity:" not in lines:
-        return text
-    j = lines.index("conformity:") + 1
-    while j < len(lines) and lines[j].startswith("  "):
-        j += 1
-    return "\n".join(lines[:j] + [f"  {band}"] + lines[j:])
+    return (band,) if band else ()
 
 
 def item_titles(res: dict, lang: str = "en") -> dict[str, str]:

@@ -498,13 +498,15 @@ class Result:
                              key="results") from None
 
     def summary(self, lab: dict | None = None,
-                temperature_keys: tuple[str, ...] | None = None) -> str:
+                temperature_keys: tuple[str, ...] | None = None,
+                conformity_notes: tuple[str, ...] = ()) -> str:
         """One line per item: clause, title, value ± U (k, ν_eff) unit, or why not measured;
         then the conformity decisions and the screening findings (``summary.txt``); an
         identity the readings contradict flagged under the title (``lab``: the laboratory
         file the certificate is issued with; ``temperature_keys``: the readings' metadata
         keys that state the room temperature, the specification's, which the renderer
-        passes: :func:`gonio.result.text.identity_lines`)."""
+        passes: :func:`gonio.result.text.identity_lines`; ``conformity_notes``: sentences
+        printed under the conformity decisions, which the renderer words)."""
         from gonio.result.text import summary_lines
 
-        return "\n".join(summary_lines(self, lab, temperature_keys)) + "\n"
+        return "\n".join(summary_lines(self, lab, temperature_keys, conformity_notes)) + "\n"

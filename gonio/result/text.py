@@ -229,10 +229,13 @@ def identity_lines(findings, metadata: dict, lab: dict | None,
 
 
 def summary_lines(result, lab: dict | None = None,
-                  temperature_keys: tuple[str, ...] | None = None) -> list[str]:
+                  temperature_keys: tuple[str, ...] | None = None,
+                  conformity_notes: tuple[str, ...] = ()) -> list[str]:
     """The lines of :meth:`~gonio.result.model.Result.summary` (``lab``: the laboratory file
     the certificate is issued with, whose identity texts a contradiction flags;
-    ``temperature_keys``: :func:`identity_lines`')."""
+    ``temperature_keys``: :func:`identity_lines`'; ``conformity_notes``: sentences printed
+    under the conformity decisions, as the renderer words them, e.g. the guard-band note:
+    :func:`gonio.report.item_outputs.band_notes`)."""
     lines = virtual_line({"provenance": result.provenance, "metadata": result.metadata})
     lines.append(result.spec_title or result.spec_key)
     lines += identity_lines(result.findings, result.metadata, lab, temperature_keys)
@@ -246,6 +249,7 @@ def summary_lines(result, lab: dict | None = None,
     if decided:
         lines.append("conformity:")
         lines += [f"  {conformity_text(c)}" for c in decided]
+        lines += [f"  {note}" for note in conformity_notes]
     for f in result.findings:
         where = f.location()
         lines.append(f"{f.action.replace('_', ' ')}: {where + ': ' if where else ''}{f.message}")

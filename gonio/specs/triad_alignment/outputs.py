@@ -14,10 +14,8 @@ from pathlib import Path
 
 from gonio.atomic import output_set
 from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
-from gonio.report.header import room_temperature_keys
 from gonio.result.tables import write_results
-from gonio.report.item_outputs import (item_titles, results_json, summary,  # noqa: F401
-                                       with_band_note)
+from gonio.report.item_outputs import item_titles, results_json, summary  # noqa: F401
 
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
@@ -32,8 +30,7 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     result = dataclasses.replace(result, tables=prediction_tables(
         result.extra.get("thermal_model")))
     out = Path(out)
-    paths = write_results(result, out, lab, with_band_note(result.summary(
-        lab, room_temperature_keys(result.spec_key)), result.to_json()))
+    paths = write_results(result, out, lab, summary(result, lab))
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,
                                          dcc=dcc))
     return paths
