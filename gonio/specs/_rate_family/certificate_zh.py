@@ -108,7 +108,12 @@ COMMON_PHRASES_ZH = (
      "{1} 第 {2} 次运行（全部）在读数中缺失"),
     (r"(\w+) run (\S+): the planned (\w+) = (.+) is missing from the readings",
      "{1} 第 {2} 次运行：计划的 {3} = {4} 在读数中缺失"),
-    # the rate-table-u-unstated finding (gonio.specs._rate_family.screening), whose it is
+    # the nominal-scale-factor-departs finding (gonio.specs._rate_family.screening)
+    (r"nominal_scale_factor (\S+) departs from the scale factor the scale-factor test "
+     r"measures, (\S+) \(ratio (\S+), beyond (\S+)× either way: a nominal in another "
+     r"unit\?\); no item reads it \(every item uses the measured K\)",
+     "元数据标称标度因数 nominal_scale_factor = {1} 与标度因数试验测得的 {2} 不符，比值 {3}，"
+     "超出任一方向 {4} 倍（标称值单位有误？）；无校准项目使用该值（各项目均用实测 K）"),
     (r"the laboratory's assumption taken from JJF 1535 Table 2 \(IEC 62047-20 states no "
      r"requirement on the rate table's accuracy\)",
      "实验室依 JJF 1535 表2 所作的假定（IEC 62047-20 对转台准确度无要求）"),

@@ -46,6 +46,12 @@ Rules (one segment = the rows of one test, run and step, in time order):
 * ``off-programme`` — a whole step (not a rest) at a rate the protocol does not plan for its
   test and run (a rate mistyped on every row of the step): every row set aside and named;
   the planned point it stood for is then named missing.
+* ``null_output`` — the null output (metadata, else protocol) leaving a zero-rate bias beyond
+  the scale-factor test's largest rate: refused, naming the key and both values
+  (:func:`null_output_rule`).
+* ``nominal-scale-factor-departs`` — a nominal scale factor more than 10× from the measured
+  K, or of the other sign: refused where an item reads it (IEC 62047-20's a_TYP), else
+  flagged (:func:`nominal_scale_factor_rule`).
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -482,6 +488,122 @@ def rate_table_unstated(metadata: dict, file, assumed_by: str) -> list[Finding]:
                     "rate_table_u_rel from the table's calibration certificate",
                     "flagged", file=file, column="rate_table_u_rel",
                     rule="the rate table's u stated from its certificate")]
+
+
+#: The largest zero-rate bias a stated null output may leave in the readings, as a share of
+#: the largest rate of the scale-factor test (:func:`null_output_rule`).
+NULL_BIAS_SHARE = 1.0
+#: The factor by which a stated nominal scale factor may depart from the one the
+#: scale-factor test measures, either way (:func:`nominal_scale_factor_rule`).
+NOMINAL_SCALE_FACTOR_FACTOR = 10.0
+
+
+def zero_rate_line(df: pd.DataFrame) -> tuple[float, float, float] | None:
+    """(K, F₀, Ω_max) the readings measure: the least-squares line y = F₀ + K·Ω through the
+    median output at each rate of the scale-factor test (every run, its rests included), and
+    the test's largest |Ω| (°/s); None where the test holds fewer than two rates or the line
+    is flat. Medians, not means: a mistyped output moves nothing here.
+
+    >>> df = pd.DataFrame({"test": ["scale_factor"] * 7,
+    ...                    "rate_dps": [-10, -10, 0, 0, 0, 10, 10],
+    ...                    "output": [2440.0, 2440.0, 2500.0, 9e9, 2500.0, 2560.0, 2560.0]})
+    >>> [round(x, 6) for x in zero_rate_line(df)]
+    [6.0, 2500.0, 10.0]
+    """
+    if not {"test", "rate_dps", "output"} <= set(df.columns):
+        return None
+    rows = df[df["test"].astype(str) == "scale_factor"]
+    r = pd.to_numeric(rows["rate_dps"], errors="coerce")
+    y = pd.to_numeric(rows["output"], errors="coerce")
+    ok = np.isfinite(r.to_numpy(float)) & np.isfinite(y.to_numpy(float))
+    med = y[ok].groupby(r[ok]).median()
+    if med.size < 2:
+        return None
+    k, f0 = np.polyfit(med.index.to_numpy(float), med.to_numpy(float), 1)
+    if not (np.isfinite(k) and np.isfinite(f0)) or k == 0:
+        return None
+    return float(k), float(f0), float(np.max(np.abs(med.index.to_numpy(float))))
+
+
+def null_output_rule(df: pd.DataFrame, null_output: float | None, file=None,
+                     unit: str = "") -> None:
+    """Refuse a null output (``null_output``: the metadata's, else the protocol's number)
+    that contradicts the zero-rate output the scale-factor test measures.
+
+    Rule: with (K, F₀, Ω_max) of :func:`zero_rate_line`, the zero-rate bias the null output
+    leaves in the readings, |F₀ − null_output|/|K|, must not exceed ``NULL_BIAS_SHARE`` ×
+    Ω_max; beyond it the GonioError names the key and both values. Reason: every item that
+    reads a rate at rest (bias, its repeatability and temperature coefficient, the static
+    record) takes (output − null_output)/K; a gyro's bias is a small part of the rates it is
+    calibrated over (0.15 °/s of 100 °/s on the bench), so a null output leaving a bias
+    beyond the largest rate tested is not a bias but a value in another unit or scale
+    (2.5 for 2500 mV: a bias of 416 °/s certified). Nothing is checked where the test
+    lacks two rates (then no item has a K either) or no null output is stated."""
+    line = zero_rate_line(df)
+    if line is None or null_output is None:
+        return
+    k, f0, top = line
+    bias, u = abs(f0 - null_output) / abs(k), f" {unit}" if unit else ""
+    if bias > NULL_BIAS_SHARE * top:
+        raise GonioError(
+            f"null_output {null_output:.6g}{u} contradicts the zero-rate output the "
+            f"scale-factor test measures, {f0:.6g}{u} (the line through its rates, K {k:.6g}): "
+            f"it would leave a bias of {bias:.4g} °/s, beyond the test's largest rate "
+            f"{top:g} °/s (a null output in another unit?)", file=file, key="null_output")
+
+
+def nominal_scale_factor_rule(df: pd.DataFrame, nominal: float | None, file=None,
+                              used_by: str | None = None) -> list[Finding]:
+    """A nominal scale factor (``nominal_scale_factor``: the metadata's, else the protocol's
+    number) that departs from the K the scale-factor test measures (:func:`zero_rate_line`)
+    by more than ``NOMINAL_SCALE_FACTOR_FACTOR`` either way, or has the other sign.
+
+    ``used_by``: the items the nominal enters (IEC 62047-20's a_TYP in the initial
+    scale-factor variation and the symmetry): a wrong nominal changes certified numbers, so
+    the contradiction is refused (GonioError naming the key and both values). None: no item
+    reads it (JJF 1535 computes every item from the measured K): a flagged finding states it
+    on the certificate and in results.json. Reason: a gyro's scale factor departs from its
+    nominal by percent; a factor of ten or more is a nominal in another unit (V for mV,
+    rad for degrees). ``[]`` where it agrees, where no nominal is stated, or where the test
+    lacks two rates."""
+    line = zero_rate_line(df)
+    if line is None or nominal is None or nominal == 0:
+        return []
+    k = line[0]
+    ratio = k / nominal
+    if 1.0 / NOMINAL_SCALE_FACTOR_FACTOR <= ratio <= NOMINAL_SCALE_FACTOR_FACTOR:
+        return []
+    text = (f"nominal_scale_factor {nominal:.6g} departs from the scale factor the "
+            f"scale-factor test measures, {k:.6g} (ratio {ratio:.3g}, beyond "
+            f"{NOMINAL_SCALE_FACTOR_FACTOR:g}× either way: a nominal in another unit?)")
+    if used_by is not None:
+        raise GonioError(f"{text}; it enters {used_by}", file=file, key="nominal_scale_factor")
+    return [Finding("nominal-scale-factor-departs", f"{text}; no item reads it (every item "
+                    "uses the measured K)", "flagged", file=file, column="nominal_scale_factor",
+                    rule=f"measured K / nominal within 1/{NOMINAL_SCALE_FACTOR_FACTOR:g} … "
+                         f"{NOMINAL_SCALE_FACTOR_FACTOR:g}")]
+
+
+def metadata_rules(readings, null_default, nominal_default, used_by: str | None = None
+                   ) -> list[Finding]:
+    """The stated null output and nominal scale factor against what the scale-factor test
+    measures (:func:`null_output_rule`, :func:`nominal_scale_factor_rule`), each the
+    metadata's value, else its ``*_default`` (the protocol's; None or ``"bench"``: not
+    stated, not checked, as the calibration then asks for it)."""
+    from gonio.specs._rate_family.rate_records import metadata_number
+
+    md, path = readings.metadata, readings.path
+    file = None if path is None else str(path)
+
+    def stated(key, default):
+        if not str(md.get(key, "") or "").strip() and default in (None, "bench"):
+            return None
+        return metadata_number(md, key, default, path)
+
+    null_output_rule(readings.data, stated("null_output", null_default), file,
+                     str(md.get("output_unit", "") or "").strip())
+    return nominal_scale_factor_rule(readings.data, stated("nominal_scale_factor",
+                                                           nominal_default), file, used_by)
 
 
 def screen(readings, segments, clauses: dict) -> list[Finding]:

@@ -17,6 +17,9 @@ CLAUSES = {"scale_factor": "5.1.3.1", "sf_temperature": "5.1.3.3", "ratiometric"
            "bias_temperature": "5.3.3.6", "g_sensitivity": "5.3.3.8", "static": "5.4.5",
            "vibration": "5.5", "resolution": "5.6"}
 
+#: The items a_TYP, the nominal scale factor, enters (a contradicted nominal is refused).
+USED_BY = "a_TYP of 5.1.3.2 (initial scale-factor variation) and 5.1.3.8 (symmetry)"
+
 
 def screen(readings, protocol=None, **_options) -> list[Finding]:
     """Findings of the screening of an IEC 62047-20 readings file (path or RateReadings)
@@ -26,7 +29,9 @@ def screen(readings, protocol=None, **_options) -> list[Finding]:
     rd = load_readings(readings)
     proto = protocol if isinstance(protocol, IECProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
-    return screening.screen(rd, plan(proto, None), CLAUSES) + screening.rate_table_unstated(
+    P = proto.sections["protocol"]
+    meta = screening.metadata_rules(rd, P["null_output"], P["nominal_scale_factor"], USED_BY)
+    return meta + screening.screen(rd, plan(proto, None), CLAUSES) + screening.rate_table_unstated(
         rd.metadata, None if rd.path is None else str(rd.path),
         "the laboratory's assumption taken from JJF 1535 Table 2 (IEC 62047-20 states no "
         "requirement on the rate table's accuracy)")

@@ -27,6 +27,8 @@ def screen(readings, protocol=None, **_options) -> list[Finding]:
         load_protocol(protocol_named(rd, protocol, KEY))
     # the plan needs a bench only for the vibration frequencies, which are not checked here
     stand_in = SimpleNamespace(gyro=SimpleNamespace(datasheet_bandwidth_hz=1.0))
-    return screening.screen(rd, plan(proto, stand_in), CLAUSES) + screening.rate_table_unstated(
+    # the nominal scale factor enters no item (every one reads the measured K): flagged only
+    meta = screening.metadata_rules(rd, proto.sections["protocol"]["null_output"], None)
+    return meta + screening.screen(rd, plan(proto, stand_in), CLAUSES) + screening.rate_table_unstated(
         rd.metadata, None if rd.path is None else str(rd.path),
         "JJF 1535 Table 2's rate accuracy (the table is taken to conform to it)")
