@@ -2512,44 +2512,6 @@ def analyse_zero_stability(record: StaticRecord | None,
         return None, f"not analysed: {exc}"
 
 
-#: A row giving both gyro_deg and gyro_counts must agree through K within this
-#: relative tolerance of the angle, or :data:`COUNTS_AGREE_ABS_DEG`, whichever is larger.
-COUNTS_AGREE_REL: float = 1e-4
-COUNTS_AGREE_ABS_DEG: float = 1e-3
-
-
-def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
-    """Refuse a row whose ``gyro_deg`` contradicts its ``gyro_counts`` through K.
-
-    K is the scale factor calibrated by 7.1 in the same file, else the metadata's
-    nominal one; without K nothing can be compared. Tolerance: the larger of
-    :data:`COUNTS_AGREE_REL` × |angle| and :data:`COUNTS_AGREE_ABS_DEG`.
-    """
-    import numpy as np
-
-    from gonio.errors import GonioError
-
-    sf = results.scale_factor
-    k = sf.value if sf.measured and sf.value else metadata_float(
-        readings.metadata, "nominal_scale_factor_counts_per_deg", file=readings.path)
-    if not k:
-        return
-    df = readings.data
-    deg = df["gyro_deg"].to_numpy(dtype=float)
-    cnt = df["gyro_counts"].to_numpy(dtype=float)
-    both = ~np.isnan(deg) & ~np.isnan(cnt)
-    if not both.any():
-        return
-    diff = np.abs(deg - cnt / k)
-    tol = np.maximum(COUNTS_AGREE_REL * np.abs(deg), COUNTS_AGREE_ABS_DEG)
-    bad = both & (diff > tol)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise GonioError(f"gyro_deg {deg[i]:.9g} contradicts gyro_counts {cnt[i]:.0f} / K "
-                         f"{k:.9g} = {cnt[i] / k:.9g} by {diff[i]:.3g}°", file=readings.path,
-                         line=int(df["line"].iat[i]), column="gyro_deg")
-
-
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
@@ -2689,7 +2651,6 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                   reference_orientation=proto.pointing_reference,
                                   **programme_conditions(proto))
     _note_exclusions(res, excluded)
-    check_counts_agree(rd, res)      # every row, those the screen set aside included
     bound_note = ""
     if tilt is None:            # a tilt file given (--tilt) states the bound itself
         settings, findings, bound_note = _tilt_bound_settings(res, kept, proto, settings,

@@ -119,6 +119,13 @@ COUPLING_TEXT: dict[str, dict[str, str]] = {
 #: hands to :func:`gonio.report.i18n.finding_text`; each group is itself translated where it
 #: can be (an axis "up", a test's item name).
 FINDINGS_ZH: tuple[tuple[str, str], ...] = (
+    (r"nominal_scale_factor_counts_per_deg (\S+) departs from the K the readings measure, "
+     r"(\S+) counts/° \(the median of gyro_counts / table_deg; ratio (\S+), beyond (\S+)× "
+     r"either way: a nominal in another unit or scale\?\); the angles are read with 7\.1's K, "
+     r"no certified item uses it",
+     "元数据标称标度因数 nominal_scale_factor_counts_per_deg = {1} 与读数测得的 K = {2} 脉冲数/(°)"
+     "（gyro_counts / table_deg 的中位数）不符，比值 {3}，超出任一方向 {4} 倍（标称值单位或量级有误？）；"
+     "角度按 7.1 的 K 换算，无校准项目使用该标称值"),
     (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\); "
      r"(\d+) readings, lines (\d+)–(\d+), all set aside",
      "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件；第 {6}–{7} 行共 {5} 个读数均剔除"),

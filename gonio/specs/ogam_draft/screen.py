@@ -79,6 +79,11 @@ and the typos caught are in docs/draft-readings.md ("Screening").
   condition present in the file, a programme condition (rate, orientation) absent, or a
   round read in some series and not in another series present, is flagged (the item is
   computed on what is there, and says so).
+- **both angles** — a row giving ``gyro_deg`` and ``gyro_counts`` must agree through K_ref
+  (:func:`counts_agree_rule`): refused, every row judged, so the screening and the
+  calibration refuse the same row.
+- **nominal K** — the metadata's nominal K within ``NOMINAL_K_FACTOR`` of K_ref
+  (:func:`nominal_k_rule`): refused without 7.1 readings, flagged with them.
 
 A reading that breaks a rule is set aside (``on_bad_reading = "exclude"``, the default) or
 refused (``"error"``); setting aside the last reading of a round refuses instead, because the
@@ -318,6 +323,83 @@ def reference_scale_factor(df: pd.DataFrame, metadata: dict, file=None) -> float
     if ok.sum() >= 3:
         return float(np.median(c[ok] / a[ok]))
     return metadata_float(metadata, "nominal_scale_factor_counts_per_deg", file=file)
+
+
+#: A row giving both gyro_deg and gyro_counts must agree through K within this relative
+#: tolerance of the angle, or :data:`COUNTS_AGREE_ABS_DEG`, whichever is larger.
+COUNTS_AGREE_REL: float = 1e-4
+COUNTS_AGREE_ABS_DEG: float = 1e-3
+
+
+def counts_agree_rule(df: pd.DataFrame, k_ref: float | None, file=None) -> list[Finding]:
+    """``counts-contradict-angle``: refuse the first row whose ``gyro_deg`` contradicts its
+    ``gyro_counts`` through K_ref (:func:`reference_scale_factor`), every row of the file
+    judged, those another rule sets aside included; ``[]`` without K_ref or where they agree.
+
+    Rule: |gyro_deg − gyro_counts/K_ref| ≤ max(:data:`COUNTS_AGREE_REL` · |gyro_deg|,
+    :data:`COUNTS_AGREE_ABS_DEG`). Reason: a row stating its angle twice states one reading;
+    when the two disagree the file cannot say which is the reading, so neither is set aside
+    as an outlier in favour of the other. K_ref, not 7.1's K: the screening has it before
+    the calibration, so the screening and the calibration refuse the same row; the two
+    agree far inside the tolerance (10⁻⁴ of the angle)."""
+    if not k_ref or not {"gyro_deg", "gyro_counts"} <= set(df.columns):
+        return []
+    deg = df["gyro_deg"].to_numpy(dtype=float)
+    cnt = df["gyro_counts"].to_numpy(dtype=float)
+    both = ~np.isnan(deg) & ~np.isnan(cnt)
+    diff = np.abs(deg - cnt / k_ref)
+    bad = both & (diff > np.maximum(COUNTS_AGREE_REL * np.abs(deg), COUNTS_AGREE_ABS_DEG))
+    if not bad.any():
+        return []
+    i = int(np.argmax(bad))
+    row = df.iloc[i]
+    return [Finding("counts-contradict-angle",
+                    f"gyro_deg {deg[i]:.9g} contradicts gyro_counts {cnt[i]:.0f} / K "
+                    f"{k_ref:.9g} = {cnt[i] / k_ref:.9g} by {diff[i]:.3g}°", "refused",
+                    file=file, line=int(row["line"]), column="gyro_deg",
+                    test=str(row["test"]), clause=CLAUSES.get(str(row["test"])),
+                    rule="gyro_deg = gyro_counts / K_ref within max(1e-4 · |angle|, 0.001°)")]
+
+
+#: The factor by which the metadata's nominal K may depart from the K the readings
+#: measure, either way (:func:`nominal_k_rule`).
+NOMINAL_K_FACTOR: float = 10.0
+
+
+def nominal_k_rule(df: pd.DataFrame, metadata: dict, file=None) -> list[Finding]:
+    """``nominal-scale-factor-departs``: the metadata's ``nominal_scale_factor_counts_per_deg``
+    against K_ref, the median of gyro_counts / table_deg over the rotation readings (at least
+    3; :func:`reference_scale_factor`), where both exist.
+
+    Rule: K_ref / nominal within 1/:data:`NOMINAL_K_FACTOR` … :data:`NOMINAL_K_FACTOR`.
+    Reason: an instrument's K departs from its nominal by ppm; ten times is a nominal in
+    another unit or scale (×1000, counts per arcsecond or radian). Where the file has no 7.1
+    readings the nominal K reads every angle of E, R, C_v and C_g (certified numbers): the
+    contradiction is refused. With 7.1 readings those angles use 7.1's K and the nominal
+    enters no certified item: a flagged finding states it (certificate, results.json)."""
+    nominal = metadata_float(metadata, "nominal_scale_factor_counts_per_deg", file=file)
+    rot = df[df["test"].isin(ROTATION_TESTS)]
+    c, a = rot["gyro_counts"].to_numpy(float), rot["table_deg"].to_numpy(float)
+    ok = np.isfinite(c) & np.isfinite(a) & (np.abs(a) > 0)
+    if not nominal or ok.sum() < 3:
+        return []
+    k_ref = float(np.median(c[ok] / a[ok]))
+    ratio = k_ref / nominal
+    if 1.0 / NOMINAL_K_FACTOR <= ratio <= NOMINAL_K_FACTOR:
+        return []
+    has_71 = bool((rot["test"] == "scale_factor").any())
+    text = (f"nominal_scale_factor_counts_per_deg {nominal:.9g} departs from the K the "
+            f"readings measure, {k_ref:.9g} counts/° (the median of gyro_counts / table_deg; "
+            f"ratio {ratio:.3g}, beyond {NOMINAL_K_FACTOR:g}× either way: a nominal in "
+            "another unit or scale?)")
+    if not has_71:
+        raise GonioError(f"{text}; without 7.1 readings it reads every angle of E, R, C_v "
+                         "and C_g", file=file, key="nominal_scale_factor_counts_per_deg")
+    return [Finding("nominal-scale-factor-departs", f"{text}; the angles are read with 7.1's "
+                    "K, no certified item uses it", "flagged", file=file,
+                    column="nominal_scale_factor_counts_per_deg",
+                    rule=f"K_ref / nominal K within 1/{NOMINAL_K_FACTOR:g} … "
+                         f"{NOMINAL_K_FACTOR:g}")]
 
 
 def _outliers(r: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -1599,7 +1681,10 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     aside_lines: set = set()
     found = _protocol_rules(df, protocol, name, aside_lines)
     out_lines = {f.line for f in found if f.action != "flagged"} | aside_lines
-    k_ref = reference_scale_factor(df[~df["line"].isin(out_lines)], readings.metadata, file)
+    kept = df[~df["line"].isin(out_lines)]
+    found += nominal_k_rule(kept, readings.metadata, name)
+    k_ref = reference_scale_factor(kept, readings.metadata, file)
+    found += counts_agree_rule(df, k_ref, name)       # every row, those set aside included
     found += _indicated_rule(df, protocol, name, k_ref, out_lines)
     found += tilt_estimate_rule(df, protocol, name, k_ref, out_lines)
     gone = {f.line for f in found if f.action != "flagged"} | aside_lines
