@@ -681,6 +681,44 @@ def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None
     return load_protocol(readings_protocol(metadata_name, readings_path, None)), conflicts
 
 
+#: The factor by which the readings' table MPE may depart from the protocol's, either way
+#: (:func:`table_mpe_plausible`).
+TABLE_MPE_FACTOR: float = 10.0
+
+
+def table_mpe_plausible(readings_arcsec: float, protocol_arcsec: float, file=None) -> None:
+    """Refuse a readings file's ``table_mpe_arcsec`` more than :data:`TABLE_MPE_FACTOR` times
+    above or below the protocol's ``annex_a.table_mpe_arcsec`` (the table the programme is
+    planned for: the draft's Table 1 ±0.1″), naming the key and both values.
+
+    Where they differ within the factor the readings' value is used and the difference
+    stated (:func:`session_settings`, a Conflict: stderr, results.json ``conflicts``). The
+    value used sets every table line and bound of the budgets (u(P), E's b, K's table line),
+    so a contradiction beyond the factor is refused, never stated beside a U it made: a
+    table ten times worse than the one the programme (and the laboratory's list of
+    standards, whose accuracy text the certificate prints) names is another table or
+    another unit (″ for ′ or µrad), and 100″ for 0.1″ made E's U 460″. A protocol MPE of 0
+    (a calibrated table's programme) sets no bound.
+
+    >>> table_mpe_plausible(0.2, 0.1)
+    >>> table_mpe_plausible(100.0, 0.1)
+    Traceback (most recent call last):
+    gonio.errors.GonioError: key table_mpe_arcsec: the readings' table MPE 100″ is 1000× the protocol's annex_a.table_mpe_arcsec 0.1″ (beyond 10× either way: another table, or another unit?); state the table's MPE in ″ as its certificate gives it, or a protocol for that table
+    """
+    from gonio.errors import GonioError
+
+    if protocol_arcsec <= 0:
+        return
+    ratio = readings_arcsec / protocol_arcsec
+    if 1.0 / TABLE_MPE_FACTOR <= ratio <= TABLE_MPE_FACTOR:
+        return
+    raise GonioError(f"the readings' table MPE {readings_arcsec:g}″ is {ratio:.4g}× the "
+                     f"protocol's annex_a.table_mpe_arcsec {protocol_arcsec:g}″ (beyond "
+                     f"{TABLE_MPE_FACTOR:g}× either way: another table, or another unit?); "
+                     "state the table's MPE in ″ as its certificate gives it, or a protocol "
+                     "for that table", file=file, key="table_mpe_arcsec")
+
+
 def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list[Conflict]]:
     """Table MPE and tilt bound of this session, by :data:`PRECEDENCE_RULE`.
 
@@ -703,6 +741,8 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
         if v is None:
             out[key] = getattr(a, key)
             continue
+        if key == "table_mpe_arcsec":
+            table_mpe_plausible(v, a.table_mpe_arcsec, file)
         out[key] = v
         if v != getattr(a, key):
             conflicts.append(Conflict(key, v, getattr(a, key), v,
