@@ -53,7 +53,8 @@ from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal, localcontext
 
 from gonio.errors import GonioError
 from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interval,
-                              check_one_limit_per_item, check_symmetric)
+                              check_nonnegative, check_one_limit_per_item,
+                              check_symmetric)
 from gonio.result.model import Conformity
 from gonio.result.statement import (K_SOURCE_BOUND_CHI2, decimals_for_sig, given_text,
                                     is_magnitude_statement, item_statement, p_text, stated_nu,
@@ -391,7 +392,9 @@ def check_nonnegative_limit(key: str, item, bounds: Limits, where: str) -> None:
     """An item that cannot be negative (``item.nonnegative``: a range, a dispersion, a noise
     level) with an upper limit below zero: no value of it can conform, so the limit is a
     mistake of the file (a sign, a unit), a GonioError naming the entry ``where`` and the
-    item, never a "fail" on the certificate.
+    item, never a "fail" on the certificate (:func:`gonio.formats.lab.check_nonnegative`,
+    which the laboratory file's and the records' checks run on the items a specification
+    declares so before any work; here it guards the items its result marks non-negative).
 
     >>> from gonio.result.model import Item
     >>> it = Item("B_s", "zero stability", "7.3", "deg/h", 0.1, nonnegative=True)
@@ -401,10 +404,8 @@ def check_nonnegative_limit(key: str, item, bounds: Limits, where: str) -> None:
     ...
     gonio.errors.GonioError: key specification_limits[0].upper: B_s cannot be negative, so its upper limit -0.01 below zero can never be met; check the limit's sign and unit
     """
-    if getattr(item, "nonnegative", False) and bounds.upper is not None and bounds.upper < 0:
-        raise GonioError(f"{key} cannot be negative, so its upper limit {bounds.upper:g} "
-                         "below zero can never be met; check the limit's sign and unit",
-                         key=f"{where}.upper")
+    if getattr(item, "nonnegative", False):
+        check_nonnegative(key, bounds.upper, key=f"{where}.upper")
 
 
 #: ``probability_model`` of an item whose U has a coverage factor from a non-normal combined

@@ -257,6 +257,49 @@ def check_magnitude_extremes(limits, extremes, *, file=None,
             check_symmetric(lim["item"], lim.get("lower"), lim.get("upper"), file=file,
                             key=f"{where}[{i}]")
 
+
+def check_nonnegative(item: str, upper: float | None, *, file=None,
+                      key: str | None = None) -> None:
+    """An upper limit below zero for an item that cannot be negative (a range, a
+    dispersion, a noise level, a time): no value of it can conform, so the limit is a
+    mistake of the file (a sign, a unit), a GonioError naming ``file``, ``key`` and the
+    item, never a "fail" on a certificate.
+
+    >>> check_nonnegative("B_s", 0.01, key="specification_limits[0].upper")
+    >>> check_nonnegative("B_s", -0.01, key="specification_limits[0].upper")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[0].upper: B_s cannot be negative, so its upper limit -0.01 below zero can never be met; check the limit's sign and unit
+    """
+    if upper is not None and upper < 0:
+        raise GonioError(f"{item} cannot be negative, so its upper limit {upper:g} "
+                         "below zero can never be met; check the limit's sign and unit",
+                         file=file, key=key)
+
+
+def check_nonnegative_limits(limits, nonnegative, *, file=None,
+                             where: str = "specification_limits") -> None:
+    """Every ``[[specification_limits]]`` entry (``limits``) of an item in ``nonnegative``
+    (the keys, or :mod:`fnmatch` patterns, a specification declares cannot be negative:
+    ``Specification.nonnegative_items``) with no ``upper`` below zero
+    (:func:`check_nonnegative`), checked when the limits are read or stored, before anything
+    is computed; the error names ``file`` and ``where[i].upper``.
+
+    >>> check_nonnegative_limits([{"item": "B_s", "upper": 0.3}, {"item": "E", "upper": -1}],
+    ...                          ("B_s",))
+    >>> check_nonnegative_limits([{"item": "ARW_x_t2", "upper": -0.1}], ("ARW_[xyz]_t[1-9]",),
+    ...                          where="limits")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key limits[0].upper: ARW_x_t2 cannot be negative, so its upper limit -0.1 below zero can never be met; check the limit's sign and unit
+    """
+    from fnmatch import fnmatchcase
+
+    for i, lim in enumerate(limits or []):
+        item = lim.get("item")
+        if isinstance(item, str) and any(fnmatchcase(item, k) for k in nonnegative):
+            check_nonnegative(item, lim.get("upper"), file=file, key=f"{where}[{i}].upper")
+
 #: ``[record]`` keys only the records write, for the sealed result they issue and render again
 #: (:func:`gonio.records.compute.render_folder`): a seal, the people the issue required, an
 #: amendment's certificate replaced, its reason and who asked for it.

@@ -110,7 +110,9 @@ def load_lab_file(lab, spec: Specification | None = None):
     file, the entry and the item: refused before anything is computed, not after
     (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns); so is a limit
     that is not symmetric for an item the specification declares an extreme of magnitudes
-    (``spec.magnitude_extremes``, :func:`gonio.formats.lab.check_magnitude_extremes`)."""
+    (``spec.magnitude_extremes``, :func:`gonio.formats.lab.check_magnitude_extremes`), and an
+    upper limit below zero for an item it declares cannot be negative
+    (``spec.nonnegative_items``, :func:`gonio.formats.lab.check_nonnegative_limits`)."""
     path = lab if isinstance(lab, (str, Path)) else None
     if path is not None:
         from gonio.formats.lab import load_lab
@@ -124,6 +126,10 @@ def load_lab_file(lab, spec: Specification | None = None):
     if spec is not None and spec.magnitude_extremes and lab:
         from gonio.formats.lab import check_magnitude_extremes
         check_magnitude_extremes(lab.get("specification_limits"), spec.magnitude_extremes,
+                                 file=path)
+    if spec is not None and spec.nonnegative_items and lab:
+        from gonio.formats.lab import check_nonnegative_limits
+        check_nonnegative_limits(lab.get("specification_limits"), spec.nonnegative_items,
                                  file=path)
     return lab
 

@@ -486,10 +486,12 @@ def check_limits(limits, spec_key: str | None = None) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
     checks them (``LAB_SCHEMA['specification_limits']``); with ``spec_key``, a limit that is
     not symmetric for an item that specification declares an extreme of magnitudes
-    (``SPEC.magnitude_extremes``) is refused as the laboratory file's check refuses it."""
+    (``SPEC.magnitude_extremes``), or an upper limit below zero for an item it declares
+    cannot be negative (``SPEC.nonnegative_items``), is refused when stored, as the
+    laboratory file's check refuses it, not only when a calibration is decided later."""
     from gonio.formats.toml import validate_table
-    from gonio.formats.lab import LAB_SCHEMA, check_magnitude_extremes
-    from gonio.specs import magnitude_extremes
+    from gonio.formats.lab import LAB_SCHEMA, check_magnitude_extremes, check_nonnegative_limits
+    from gonio.specs import magnitude_extremes, nonnegative_items
 
     if isinstance(limits, str):
         try:
@@ -512,6 +514,7 @@ def check_limits(limits, spec_key: str | None = None) -> list[dict]:
         out.append(d)
     if spec_key:
         check_magnitude_extremes(out, magnitude_extremes(spec_key), where="limits")
+        check_nonnegative_limits(out, nonnegative_items(spec_key), where="limits")
     return out
 
 

@@ -324,6 +324,17 @@ class Specification:
         :func:`gonio.pipeline.dispatch.load_lab_file` and the records' limits); conformity
         decides it as one (:func:`gonio.analysis.conformity.decide_items`). Each is one of
         :attr:`item_keys` where those are given. Empty: none.
+    nonnegative_items : tuple of str
+        The keys (or :mod:`fnmatch` patterns, as in :attr:`item_keys`) of its items that
+        cannot be negative by their definition (a range, a dispersion, a noise level, a
+        time): an upper limit below zero for one can never be met, so a laboratory file's or
+        an instrument record's such limit is refused when it is read or stored
+        (:func:`gonio.formats.lab.check_nonnegative_limits`, called by
+        :func:`gonio.pipeline.dispatch.load_lab_file` and the records' limits), as conformity
+        refuses one for an item its result marks non-negative
+        (:func:`gonio.analysis.conformity.check_nonnegative_limit`). Each is one of
+        :attr:`item_keys` where those are given. Empty: none declared (checked once
+        calibrated only).
     commands : tuple of (str, str)
         The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
         pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
@@ -385,6 +396,7 @@ class Specification:
     arguments: dict[str, str] = field(default_factory=dict)
     item_keys: tuple[str, ...] = ()
     magnitude_extremes: tuple[str, ...] = ()
+    nonnegative_items: tuple[str, ...] = ()
     dcc_units: dict[str, str] = field(default_factory=dict)
     recalibration_interval_months: int | None = None
     simulated_files: tuple[str, ...] = ()
@@ -415,12 +427,13 @@ class Specification:
         for name in ("simulate_options", "calibrate_options", "budget_options",
                      "serve_options"):
             _set_strings(self, where, name, frozenset)
-        for name in ("clauses", "item_keys", "magnitude_extremes", "simulated_files"):
+        for name in ("clauses", "item_keys", "magnitude_extremes", "nonnegative_items",
+                     "simulated_files"):
             _set_strings(self, where, name, tuple)
-        unknown = [k for k in self.magnitude_extremes if not self.knows_item(k)]
-        if unknown:
-            raise _field_error(where, "magnitude_extremes", "keys of its items (item_keys)",
-                               unknown)
+        for name in ("magnitude_extremes", "nonnegative_items"):
+            unknown = [k for k in getattr(self, name) if not self.knows_item(k)]
+            if unknown:
+                raise _field_error(where, name, "keys of its items (item_keys)", unknown)
         self._check_tables(where)
 
     def _check_tables(self, where: str) -> None:
@@ -689,6 +702,19 @@ def decide_conformity(result, lab: dict | None):
     decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN,
                   magnitude_extremes=magnitude_extremes(result.spec_key))
     return result
+
+
+def nonnegative_items(key: str) -> tuple[str, ...]:
+    """The items (keys or patterns) the specification ``key`` declares cannot be negative
+    (``SPEC.nonnegative_items``); none for a key no longer registered.
+
+    >>> nonnegative_items("ogam-draft")[:2]
+    ('scale_factor_nonlinearity', 'zero_stability')
+    """
+    try:
+        return get(key).nonnegative_items
+    except GonioError:
+        return ()
 
 
 def magnitude_extremes(key: str) -> tuple[str, ...]:

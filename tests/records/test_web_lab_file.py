@@ -78,7 +78,11 @@ def n_calibrations(store) -> int:
      "my-lab.toml: key customer.fax: unknown key"),
     ("ogam-draft", "[laboratory\nname = 1\n", "my-lab.toml"),
     ("ogam-draft", HEAD, "my-lab.toml: no [[specification_limits]]"),
-], ids=["unknown-item", "triad-order-5", "unknown-key", "not-toml", "no-limits"])
+    ("ogam-draft", limits_toml("angle_deviation") + '\n[[specification_limits]]\n'
+     'item = "zero_stability"\nupper = -0.01\n',
+     "my-lab.toml: key specification_limits[1].upper: zero_stability cannot be negative"),
+], ids=["unknown-item", "triad-order-5", "unknown-key", "not-toml", "no-limits",
+        "negative-upper-of-nonnegative"])
 def test_bad_lab_file_refused_on_the_form(app, sqlite_store, spec_key, lab, expect):  # noqa: F811
     """The form comes back (400) with the one line the command line prints, naming the file
     as uploaded (never the server's temporary path); no calibration is queued."""

@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
 from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
-from gonio.specs.iec62047_20.keys import ITEM_ROWS, KEY, MAGNITUDE_KEYS
+from gonio.specs.iec62047_20.keys import ITEM_ROWS, KEY, MAGNITUDE_KEYS, NONNEGATIVE
 
 if TYPE_CHECKING:
     from gonio.result.model import Result
@@ -153,7 +153,7 @@ SPEC = rate_specification(
     "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in ITEM_ROWS),
     item_keys=tuple(r[0] for r in ITEM_ROWS),
-    magnitude_extremes=MAGNITUDE_KEYS,
+    magnitude_extremes=MAGNITUDE_KEYS, nonnegative_items=tuple(sorted(NONNEGATIVE)),
     default_protocol=KEY, load_protocol=lazy("gonio.specs.iec62047_20.protocol:load_protocol"),
     calibrate=calibrate, screen=lazy("gonio.specs.iec62047_20.screen:screen"),
     budget=None,

@@ -34,7 +34,7 @@ from gonio.specs._rate_family.rate_records import (RateContext, static_output, s
                                                    table_bound_statement,
                                                    TABLE2_RATE_ACCURACY_REL)
 from gonio.units import S_PER_H
-from gonio.specs.iec62047_20.keys import ITEM_ROWS
+from gonio.specs.iec62047_20.keys import ITEM_ROWS, NONNEGATIVE  # noqa: F401 (rate_records reads it here)
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b, welch_satterthwaite
 
 
@@ -3734,8 +3734,3 @@ NEEDS = {row[0]: ("scale_factor",) for row in ITEMS
          if row[0] not in ("scale_factor", "sf_temperature_coefficient")}
 NEEDS["scale_factor"] = ("sf_temperature_coefficient",)
 
-
-#: Items that are non-negative by their definition (a maximum of absolute values, a standard
-#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
-#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
-NONNEGATIVE = frozenset({"ratiometric_error", "bias_ratiometric_error", "cross_axis", "g_sensitivity", "linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})

@@ -40,3 +40,11 @@ ITEM_ROWS = (
 #: checks that this list names exactly the items a calibration states so.
 MAGNITUDE_KEYS = ('ratiometric_error', 'linearity', 'cross_axis', 'bias_ratiometric_error',
                   'g_sensitivity')
+
+
+#: Items that are non-negative by their definition (a maximum of absolute values, a standard
+#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
+#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement); an
+#: instrument's stored or a laboratory file's upper limit below zero for one is refused
+#: (``Specification.nonnegative_items``).
+NONNEGATIVE = frozenset({"ratiometric_error", "bias_ratiometric_error", "cross_axis", "g_sensitivity", "linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})

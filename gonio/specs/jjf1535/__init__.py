@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
 from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
-from gonio.specs.jjf1535.keys import ITEM_ROWS, KEY, MAGNITUDE_KEYS
+from gonio.specs.jjf1535.keys import ITEM_ROWS, KEY, MAGNITUDE_KEYS, NONNEGATIVE
 
 if TYPE_CHECKING:
     from gonio.result.model import Result
@@ -141,7 +141,7 @@ SPEC = rate_specification(
     "gonio.specs.jjf1535", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in ITEM_ROWS),
     item_keys=tuple(r[0] for r in ITEM_ROWS),
-    magnitude_extremes=MAGNITUDE_KEYS,
+    magnitude_extremes=MAGNITUDE_KEYS, nonnegative_items=tuple(sorted(NONNEGATIVE)),
     default_protocol=KEY, load_protocol=lazy("gonio.specs.jjf1535.protocol:load_protocol"),
     calibrate=calibrate, screen=lazy("gonio.specs.jjf1535.screen:screen"),
     budget=lazy("gonio.specs.jjf1535.budget:annex_a"),

@@ -34,7 +34,7 @@ from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph,
                                                    rate_table_line, table_bound_statement,
                                                    TABLE2_RATE_ACCURACY_REL)
 from gonio.units import S_PER_H
-from gonio.specs.jjf1535.keys import ITEM_ROWS
+from gonio.specs.jjf1535.keys import ITEM_ROWS, NONNEGATIVE  # noqa: F401 (rate_records reads it here)
 from uncertainty import DOF_U_WITHIN_10PCT, from_u, type_b
 
 
@@ -1140,8 +1140,3 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
 #: (key, title, clause, function): each item's function has the item's name.
 ITEMS = tuple((key, title, clause, globals()[key]) for key, title, clause in ITEM_ROWS)
 
-
-#: Items that are non-negative by their definition (a maximum of absolute values, a standard
-#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
-#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
-NONNEGATIVE = frozenset({"g_sensitivity", "nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold", "resolution", "bias_stability", "bias_repeatability", "warmup_time", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth"})

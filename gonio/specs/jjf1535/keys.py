@@ -32,3 +32,11 @@ ITEM_ROWS = (
 #: checks that this list names exactly the items a calibration states so.
 MAGNITUDE_KEYS = ('nonlinearity', 'asymmetry', 'sf_temperature_sensitivity', 'g_sensitivity',
                   'bias_temperature_sensitivity')
+
+
+#: Items that are non-negative by their definition (a maximum of absolute values, a standard
+#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
+#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement); an
+#: instrument's stored or a laboratory file's upper limit below zero for one is refused
+#: (``Specification.nonnegative_items``).
+NONNEGATIVE = frozenset({"g_sensitivity", "nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold", "resolution", "bias_stability", "bias_repeatability", "warmup_time", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth"})

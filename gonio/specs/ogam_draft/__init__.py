@@ -21,7 +21,7 @@ clause-by-clause reading is ``docs/draft-readings.md``.
 """
 
 from gonio.specs import Coverage, Specification, lazy
-from gonio.specs.ogam_draft.keys import ITEM_KEYS
+from gonio.specs.ogam_draft.keys import ITEM_KEYS, NONNEGATIVE_KEYS
 
 SPEC = Specification(
     key="ogam-draft",
@@ -33,6 +33,7 @@ SPEC = Specification(
     item_keys=tuple(ITEM_KEYS),
     # E (7.4) = ± max|E_i|: an extreme of magnitudes, compared with a symmetric limit only
     magnitude_extremes=("angle_deviation",),
+    nonnegative_items=NONNEGATIVE_KEYS,
     default_protocol="ogam-draft",
     default_bench="rlg",
     load_protocol=lazy("gonio.specs.ogam_draft.protocol:load_protocol"),

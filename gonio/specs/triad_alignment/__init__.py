@@ -11,7 +11,7 @@ reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.m
 """
 
 from gonio.specs import Coverage, Specification, lazy
-from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, THERMAL_POINT_KEYS
+from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, NONNEGATIVE_KEYS, THERMAL_POINT_KEYS
 
 #: ``gonio.specs.triad_alignment.readings.FORMAT``, written here so that loading ``SPEC`` imports no reader
 #: (tests/test_cli_startup.py checks that the two agree).
@@ -53,6 +53,7 @@ SPEC = Specification(
     named_inputs=lazy("gonio.specs.triad_alignment.readings:named_inputs"),
     certificate_content="gonio.specs.triad_alignment.certificate",
     item_keys=tuple(ALIGNMENT_KEYS) + THERMAL_POINT_KEYS,
+    nonnegative_items=NONNEGATIVE_KEYS,
     commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),
               ("thermal-model", "gonio.specs.triad_alignment.commands:add_thermal_model")),
 )

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from fnmatch import fnmatchcase
 from pathlib import Path
 
 import numpy as np
@@ -53,7 +54,8 @@ from gonio.result.gum import dispersion_uncertainty
 from gonio.result.statement import coverage_k, p_text
 from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dph_to_dps, dps_to_dph
 from gonio.specs.triad_alignment.figure_data import figure_series
-from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
+from gonio.specs.triad_alignment.keys import (ALIGNMENT_KEYS, AXES, NONNEGATIVE_KEYS,
+                                              THERMAL_POINT_KEYS)
 
 #: Where k of a Welch–Satterthwaite combination comes from: t_0.9545 of ν_eff as stated (its
 #: integer part, GUM G.6.4), so the k a statement prints is the one of the ν it prints.
@@ -780,7 +782,8 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
                 unc, other = not_certified(certified(unc, bc, statement), unc)
                 both = {"statement": statement, "bound_condition": bc, "not_certified": other}
             items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
-                              units[name], value, uncertainty=unc, nonnegative=name == "ARW",
+                              units[name], value, uncertainty=unc,
+                              nonnegative=any(fnmatchcase(key, p) for p in NONNEGATIVE_KEYS),
                               details={**both, "setpoint_c": pt["setpoint_c"],
                                        "supply_v": pt["supply_v"],
                                        "theta_c": pt["theta_c"], "u_v": pt["u_v"],

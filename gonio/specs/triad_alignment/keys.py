@@ -17,3 +17,9 @@ ALIGNMENT_KEYS = ([f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in
 _INDEX = ("[1-9]", "[1-9][0-9]")
 THERMAL_POINT_KEYS = tuple(f"{m}_[xyz]_t{i}_v{j}" for m in ("K", "b") for i in _INDEX
                            for j in _INDEX) + tuple(f"ARW_[xyz]_t{i}" for i in _INDEX)
+
+#: The items that cannot be negative: each gyro's angle random walk at a set point (a noise
+#: coefficient), marked so by the thermal model (:func:`thermal_items`) and stated with its
+#: upper bound where U exceeds it; an instrument's stored or a laboratory file's upper limit
+#: below zero for one is refused (``Specification.nonnegative_items``).
+NONNEGATIVE_KEYS = tuple(f"ARW_[xyz]_t{i}" for i in _INDEX)
