@@ -9,11 +9,35 @@ from __future__ import annotations
 import csv
 import math
 import re
+import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
 
 from gonio.errors import GonioError, check_not_binary
 from gonio.units import ARCSEC_PER_DEG
+
+def identity_text(text) -> str:
+    """A person's name or an instrument's identifier (serial, model, manufacturer, a
+    certificate's identifier) as compared for identity, everywhere gonio tells two such texts
+    apart or matches them: Unicode compatibility forms folded (NFKC: full-width ``ＡＬＩＣＥ``
+    is ``ALICE``, a ligature its letters), case folded (:meth:`str.casefold`, then NFKC
+    again, as Unicode's compatibility caseless matching does), format characters that print
+    as nothing removed (zero-width spaces, soft hyphens: category Cf), and runs of white space
+    (any Unicode space, an ideographic one too) collapsed to one space, ends stripped; None
+    is the empty text. Two
+    texts that print the same to a reader are the same here, so a name or serial typed in
+    another form neither passes as another person's or instrument's nor hides a match.
+
+    >>> identity_text("  ＡＬＩＣＥ\u3000 Smith ") == identity_text("alice smith")
+    True
+    >>> identity_text("RLG\u200b-0001"), identity_text("Stra\u00dfe"), identity_text(None)
+    ('rlg-0001', 'strasse', '')
+    """
+    folded = unicodedata.normalize("NFKC", unicodedata.normalize(
+        "NFKC", "" if text is None else str(text)).casefold())
+    shown = "".join(ch for ch in folded if unicodedata.category(ch) != "Cf")
+    return " ".join(shown.split())
+
 
 #: Metadata keys the package understands (others are kept).
 KNOWN_METADATA: tuple[str, ...] = (

@@ -5,7 +5,8 @@ The readings' own metadata (``# serial:``, ``# model:``, ``# manufacturer:``, an
 gyro's ``# gyro_type:``, the
 temperature ``# temperature_c:`` or ``# room_temperature_c:``, ``# humidity_pct:``) are
 compared with the laboratory file's ``[instrument]`` and ``[environment]``: a text that
-differs (compared without regard to case and runs of white space) or a temperature or
+differs (compared without regard to case, Unicode compatibility forms and runs of white
+space: :func:`gonio.formats.metadata.identity_text`) or a temperature or
 humidity further apart than the tolerance (both numbers named as written, the
 certificate's :func:`~gonio.report.header.condition_text`: a laboratory file's ``25.0`` is
 "25.0 °C") (``[identity]`` ``temperature_tolerance_c``, default
@@ -22,11 +23,10 @@ and the DCC's identification flag the contradicted line beside it
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 
 from gonio.errors import GonioError, first_of
-from gonio.formats.metadata import parse_number
+from gonio.formats.metadata import identity_text, parse_number
 from gonio.formats.provenance import readings_metadata
 from gonio.report.header import condition_text
 from gonio.result.findings import IDENTITY_CODE, Finding
@@ -47,7 +47,10 @@ NUMBER_FIELDS = (("temperature", "environment", "temperature_c",
 
 
 def _norm(text) -> str:
-    return re.sub(r"\s+", " ", str(text)).strip().casefold()
+    """An identity text (serial, model, manufacturer, gyro type) as compared: the one
+    identity normaliser, :func:`gonio.formats.metadata.identity_text` (case, Unicode
+    compatibility forms and runs of white space folded)."""
+    return identity_text(text)
 
 
 def _first(md: dict, keys) -> tuple[str | None, str | None]:

@@ -23,6 +23,7 @@ from pathlib import Path
 from sqlalchemy import func, select
 
 from gonio.errors import GonioError
+from gonio.formats.metadata import identity_text
 from gonio.records import blobs, services
 from gonio.records.models import (Blob, Calibration, CalibrationFile, CalibrationStandard,
                                   Customer, Instrument, Standard, User)
@@ -57,13 +58,17 @@ def _identity(meta: dict) -> tuple[str, str, str]:
 
 
 def folded(text: str) -> str:
-    """A name as compared for identity: case and spacing folded, as the laboratory file is
-    compared with the readings (:mod:`gonio.pipeline.identity`).
+    """A name as compared for identity: the one identity normaliser,
+    :func:`gonio.formats.metadata.identity_text` (case, Unicode compatibility forms and
+    spacing folded), as the laboratory file is compared with the readings
+    (:mod:`gonio.pipeline.identity`).
 
-    >>> folded("  RLG-0001 ") == folded("rlg-0001"), folded("Gyro  Works") == "gyro works"
-    (True, True)
+    >>> folded("  RLG-0001 ") == folded("rlg-0001") == folded("ＲＬＧ－０００１")
+    True
+    >>> folded("Gyro  Works")
+    'gyro works'
     """
-    return " ".join(str(text).split()).casefold()
+    return identity_text(text)
 
 
 def registered_instrument(s, meta: dict) -> Instrument | None:

@@ -383,12 +383,19 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
 
 
 def _printed_name(name: str) -> str:
-    """A person's name as compared for telling people apart: case and spacing folded.
+    """A person's name as compared for telling people apart (the user names and full names
+    of :func:`_distinct_name`, the readings' operator against :func:`names_held`): the one
+    identity normaliser, :func:`gonio.formats.metadata.identity_text` (case, Unicode
+    compatibility forms and spacing folded), on both sides.
 
     >>> _printed_name("  Alice   SMITH ") == _printed_name("alice smith")
     True
+    >>> _printed_name("ＡＬＩＣＥ ＳＭＩＴＨ") == _printed_name("Alice Smith")
+    True
     """
-    return " ".join(name.split()).casefold()
+    from gonio.formats.metadata import identity_text
+
+    return identity_text(name)
 
 
 def _distinct_name(s: Session, u: User) -> None:
@@ -518,6 +525,28 @@ def check_limits(limits, spec_key: str | None = None) -> list[dict]:
     return out
 
 
+def _refuse_registered(s: Session, manufacturer: str, model: str, serial: str,
+                       other_than: int | None = None) -> None:
+    """Refuse a registration (or an edit of instrument ``other_than``) whose manufacturer,
+    model and serial are another registered instrument's, compared as the readings are
+    matched to a registered instrument (:func:`gonio.records.importer.registered_instrument`,
+    the one identity normaliser :func:`gonio.formats.metadata.identity_text`: case, Unicode
+    compatibility forms and spacing folded): ``rlg-0001`` or full-width ``ＲＬＧ-0001`` beside
+    the registered RLG-0001 would be one instrument registered twice, its calibrations'
+    history split between two records."""
+    from gonio.formats.metadata import identity_text
+
+    want = tuple(identity_text(x) for x in (manufacturer, model, serial))
+    for other in s.scalars(select(Instrument).where(Instrument.id != (other_than or 0))
+                           .order_by(Instrument.id)):
+        if tuple(identity_text(x) for x in (other.manufacturer, other.model,
+                                            other.serial)) == want:
+            raise GonioError("this instrument (manufacturer, model, serial) is registered"
+                             f" as {other.manufacturer} {other.model} {other.serial}"
+                             " (compared without regard to case, character width and "
+                             "spacing)", key="serial")
+
+
 def register_instrument(store, actor: User, *, customer_id: int, serial: str, spec_key: str,
                         kind: str = "", manufacturer: str = "", model: str = "",
                         interval_months=None, limits=(), gyro_type: str = "") -> Instrument:
@@ -544,11 +573,7 @@ def register_instrument(store, actor: User, *, customer_id: int, serial: str, sp
         if cust.retired_on is not None:
             raise GonioError(f"customer {cust.name} was retired on {cust.retired_on}",
                              key="customer")
-        if s.scalar(select(Instrument).where(Instrument.manufacturer == inst.manufacturer,
-                                             Instrument.model == inst.model,
-                                             Instrument.serial == inst.serial)):
-            raise GonioError("this instrument (manufacturer, model, serial) is registered",
-                             key="serial")
+        _refuse_registered(s, inst.manufacturer, inst.model, inst.serial)
         s.add(inst)
         s.flush()
         audit(s, actor, "create", "instrument", inst.id, None, state(inst))
@@ -734,6 +759,11 @@ def update_instrument(store, actor: User, instrument_id: int, *, customer_id=Non
             inst = s.get(Instrument, int(instrument_id))
             spec_key = inst.spec_key if inst is not None else None
         values["limits_json"] = json.dumps(check_limits(limits, spec_key))
+    if {"manufacturer", "model", "serial"} & set(values):
+        with store.session() as s:
+            if (inst := s.get(Instrument, int(instrument_id))) is not None:
+                _refuse_registered(s, *(values.get(k, getattr(inst, k)) for k in (
+                    "manufacturer", "model", "serial")), other_than=inst.id)
     return _update(store, actor, Instrument, instrument_id, "instrument", values, retire,
                    lambda o: select(Instrument).where(
                        Instrument.manufacturer == o.manufacturer, Instrument.model == o.model,
@@ -1384,13 +1414,16 @@ def _governed(s: Session, st: Standard, start: _dt.date, sha256: str,
 
 def _same_identifier(text: str | None) -> str:
     """A certificate identifier as compared with a withdrawn entry's
-    (:func:`_refuse_withdrawn_bytes`): case and runs of white space do not make another
-    certificate ("tc-1 " is TC-1).
+    (:func:`_refuse_withdrawn_bytes`): case, Unicode compatibility forms and runs of white
+    space do not make another certificate ("tc-1 " and full-width "ＴＣ－１" are TC-1), by
+    the one identity normaliser, :func:`gonio.formats.metadata.identity_text`.
 
-    >>> _same_identifier(" tc-1  a") == _same_identifier("TC-1 A")
+    >>> _same_identifier(" tc-1  a") == _same_identifier("TC-1 A") == _same_identifier("ＴＣ－１ Ａ")
     True
     """
-    return " ".join((text or "").split()).casefold()
+    from gonio.formats.metadata import identity_text
+
+    return identity_text(text)
 
 
 def _refuse_withdrawn_bytes(s: Session, store, sha256: str, content: str, *,
@@ -2257,8 +2290,9 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
     and changes, the creator approves), with 3 never. The same for a first issue: who
     reviewed it and last changed its details (:func:`last_changer`) does not approve it.
     The person the readings name as their operator (:func:`readings_operator`, matched by
-    user name or any full name they hold or held, :func:`names_held`, case and spacing
-    folded) counts as the creator."""
+    user name or any full name they hold or held, :func:`names_held`, both sides folded by
+    :func:`_printed_name`: case, Unicode compatibility forms and spacing) counts as the
+    creator."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
@@ -2366,7 +2400,9 @@ def readings_operator(s: Session, cal: Calibration) -> str:
     """Who measured a calibration's readings, as their ``# operator:`` line (or a stream's
     metadata) names them; "" where they name nobody or the file cannot be read (no store
     known: the session's ``info["blob_root"]``). :func:`check_duties` treats that person as
-    the calibration's creator: they neither review nor approve it."""
+    the calibration's creator: they neither review nor approve it. The name is returned as
+    written, spacing collapsed (for the message); it is compared folded
+    (:func:`_printed_name`), never as written."""
     from gonio.formats.provenance import readings_metadata
     from gonio.records.compute import readings_file
 
