@@ -400,15 +400,22 @@ def _printed_name(name: str) -> str:
 
 def _distinct_name(s: Session, u: User) -> None:
     """The name a certificate prints for ``u`` (:func:`_name`: the full name, else the user
-    name) is no other user's (active or not: their signatures stand), case and spacing
-    folded: the calibrated, checked and approved by of a certificate tell their people
-    apart (ISO/IEC 17025 7.8.2.1 k). A GonioError naming the field otherwise."""
+    name) is no other user's, now or before (:func:`names_held`: a name another user gave
+    up still stands on the certificates they signed; active or not), folded as
+    :func:`_printed_name` folds it: the calibrated, checked and approved by of a
+    certificate tell their people apart (ISO/IEC 17025 7.8.2.1 k). A GonioError naming the
+    field otherwise."""
     mine = _printed_name(_name(u))
     for other in s.scalars(select(User).where(User.username != u.username)):
         if _printed_name(_name(other)) == mine:
             raise GonioError(f"the user {other.username!r} is named {_name(other)!r} on "
                              "certificates already: give every person a name that tells them "
                              "apart", key="full_name" if u.full_name else "username")
+        if other.id is not None and mine in names_held(s, other):
+            raise GonioError(f"the user {other.username!r} was named {_name(u)!r} before "
+                             "and may be so named on certificates: give every person a name "
+                             "that tells them apart", key="full_name" if u.full_name
+                             else "username")
 
 
 def update_user(store, actor: User | None, username: str, *, active: bool | None = None,

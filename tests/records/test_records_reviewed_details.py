@@ -341,6 +341,27 @@ def test_people_are_told_apart_by_their_names(store, people):
     services.update_user(store, None, "rev", full_name="Alice Smythe")
 
 
+def test_a_name_given_up_is_not_given_to_another(store, people):
+    """A certificate signed by "Tom Tech" keeps that name after its signatory is renamed: no
+    other user may take it, in any case or Unicode form; the renamed person may take it
+    back."""
+    import unicodedata
+    services.update_user(store, None, "tech", full_name="Tom Tech")
+    services.update_user(store, None, "tech", full_name="Thomas Techson")
+    for name in ("Tom Tech", "TOM  tech"):
+        with pytest.raises(GonioError, match="'tech' was named"):
+            services.update_user(store, None, "rev", full_name=name)
+        with pytest.raises(GonioError, match="'tech' was named"):
+            services.create_user(store, None, "tom2", "correct horse battery", "reviewer",
+                                 full_name=name)
+    services.update_user(store, None, "tech", full_name="Tom Tech")
+    # a name in another Unicode form prints alike: the same name
+    services.update_user(store, None, "rev", full_name=unicodedata.normalize("NFC", "José Núñez"))
+    with pytest.raises(GonioError, match="on certificates already"):
+        services.create_user(store, None, "jose2", "correct horse battery", "reviewer",
+                             full_name=unicodedata.normalize("NFD", "José Núñez"))
+
+
 def test_a_backup_never_replaces_the_records_own_files(sqlite_store, tmp_path):
     from .conftest import make_people
 
