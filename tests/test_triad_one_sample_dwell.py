@@ -28,19 +28,21 @@ def triad_files(tmp_path_factory):
 
 def with_static_n(src: Path, dst: Path, n: int) -> tuple[Path, list[int], list[int]]:
     """The session copied to ``dst`` with n_samples = ``n`` on every static soak dwell of
-    thermal.csv (rate 0, sd kept); returns (thermal file, the dwells' 1-based lines, their
+    thermal.csv (rate 0, sd kept; duration_s n/sample_rate_hz, as the count says); returns (thermal file, the dwells' 1-based lines, their
     original n_samples)."""
     shutil.copytree(src, dst)
     f = dst / "thermal.csv"
     lines = f.read_text().splitlines(keepends=True)
     head = next(i for i, ln in enumerate(lines) if ln.startswith("test,"))
     cols = lines[head].strip().split(",")
+    rate_hz = float(next(ln for ln in lines if ln.startswith("# sample_rate_hz:")).split(":")[1])
     hit, was = [], []
     for i in range(head + 1, len(lines)):
         p = lines[i].rstrip("\n").split(",")
         if p[cols.index("phase")] == "soak" and float(p[cols.index("rate_dps")]) == 0.0:
             was.append(int(p[cols.index("n_samples")]))
             p[cols.index("n_samples")] = str(n)
+            p[cols.index("duration_s")] = repr(n / rate_hz)
             lines[i] = ",".join(p) + "\n"
             hit.append(i + 1)
     f.write_text("".join(lines))

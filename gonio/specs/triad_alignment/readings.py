@@ -256,7 +256,54 @@ def _parse_triad_readings(text: str, file: str) -> TriadReadings:
     for c in _FLOATS:
         df[c] = df[c].astype(float)
     check_triad_rows(df, file)
+    check_sample_counts(df, float(meta["sample_rate_hz"]), file)
+    check_sd_cells(df, header, file)
     return TriadReadings(df, meta, file)
+
+
+#: Largest difference, in samples, between a row's ``n_samples`` and ``duration_s`` ×
+#: ``sample_rate_hz`` (a record starts and ends on a sample: one sample either way).
+SAMPLE_COUNT_TOL = 1.0
+
+
+def check_sample_counts(df: pd.DataFrame, rate_hz: float, file) -> None:
+    """Refuse a row whose ``n_samples`` contradicts ``duration_s`` × ``sample_rate_hz`` by
+    more than :data:`SAMPLE_COUNT_TOL` samples. The duration and the file's sample rate are
+    the record's settings; ``n_samples`` is the count they give, and it weighs the dwell in
+    the alignment fit and divides its sd: a count that disagrees with them is a typo in one
+    of the two columns, which cannot be told, so the row is refused (naming ``n_samples``)
+    rather than fitted with a wrong weight."""
+    n = df["n_samples"].to_numpy(float)
+    want = df["duration_s"].to_numpy(float) * rate_hz
+    bad = np.flatnonzero(np.abs(n - want) > SAMPLE_COUNT_TOL)
+    if bad.size:
+        k = int(bad[0])
+        raise GonioError(f"n_samples {int(n[k])} contradicts duration_s "
+                         f"{df['duration_s'].iloc[k]:.6g} s × sample_rate_hz {rate_hz:.6g} Hz = "
+                         f"{want[k]:.6g} samples (more than {SAMPLE_COUNT_TOL:g} apart): a typo in "
+                         "one of them", file=file, line=int(df["line"].iloc[k]), column="n_samples")
+
+
+def check_sd_cells(df: pd.DataFrame, header: list[str], file) -> None:
+    """Refuse an empty ``sd_*`` cell on a row of two samples or more of a test whose other
+    rows of two samples or more log that column: a lost cell, not a record without one (the
+    static soak rows' sd gives the angle random walk, the alignment dwells' the consistency
+    check's noise scale; read as "no sd" the row would drop out of both unsaid). A row of
+    one sample has no sd (its cell is empty); a column absent from the header, or empty on
+    every such row of a test, is a file that does not log it."""
+    many = df["n_samples"].to_numpy() >= 2
+    for c in SD:
+        if c not in header:
+            continue
+        v = df[c].to_numpy(float)
+        for test in TESTS:
+            rows = many & (df["test"] == test).to_numpy()
+            empty = rows & np.isnan(v)
+            if empty.any() and (rows & ~np.isnan(v)).any():
+                k = int(np.flatnonzero(empty)[0])
+                raise GonioError(f"empty {c} on this {test} row of {int(df['n_samples'].iloc[k])} "
+                                 f"samples, where the other {test} rows give one: a lost cell",
+                                 file=file, line=int(df["line"].iloc[k]), column=c)
 
 
 def check_last_row_ended(text: str, lines: list[str], header_line: int, header: list[str],
