@@ -152,3 +152,124 @@ def test_supply_column_off_on_many_soak_rows_is_refused(sim, tmp_path, capsys):
     rc, cap = _calibrate(d, tmp_path, capsys)
     assert rc == 2 and "thermal soak rows depart from the set points" in cap.err, cap.err
     assert f"thermal.csv:{rows[0] + 1}: column supply_v" in cap.err
+
+
+def _delete(text: str, i: int) -> str:
+    lines = text.split("\n")
+    return "\n".join(lines[:i] + lines[i + 1:])
+
+
+def _one_line_refusal(rc, cap, where: str):
+    err = cap.err.strip()
+    assert rc == 2 and "\n" not in err and "Traceback" not in err, err
+    assert where in err, err
+    return err
+
+
+def test_n_samples_contradicting_duration_and_rate_is_refused(sim, tmp_path, capsys):
+    """Before: an alignment dwell's n_samples halved (720 for 14.4 s at 100 Hz) was used as
+    the dwell's weight (M_yx moved 0.06 %, no finding). Now refused naming the cell; one
+    sample off (a record's ends) is accepted."""
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    i = _rows(text, "alignment")[0]
+    n = int(text.split("\n")[i].split(",")[9])
+    (d / "readings.csv").write_text(_edit(text, i, "n_samples", str(n // 2)), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    err = _one_line_refusal(rc, cap, f"readings.csv:{i + 1}: column n_samples:")
+    assert "contradicts duration_s" in err and "sample_rate_hz" in err
+    (d / "readings.csv").write_text(_edit(text, i, "n_samples", str(n + 1)), encoding="utf-8")
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "one")]) == 0
+
+
+def test_empty_sd_cell_of_a_dwell_is_refused(sim, tmp_path, capsys):
+    """Before: an alignment dwell's sd_x left empty was read as "no sd" and the dwell
+    dropped out of the consistency check's noise scale, unsaid. Now refused naming the
+    cell (a one-sample static row keeps its empty sd)."""
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    i = _rows(text, "alignment")[0]
+    (d / "readings.csv").write_text(_edit(text, i, "sd_x", ""), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    _one_line_refusal(rc, cap, f"readings.csv:{i + 1}: column sd_x: empty sd_x")
+
+
+def test_huge_sd_sets_its_dwell_aside_as_the_file_without_it(sim, tmp_path, capsys):
+    """Before: sd_x 250 (the others ≈ 2.5) on an alignment dwell was used as given, no
+    finding. Now the dwell is set aside (``sd-departs``), listed in unused_readings, and M
+    and b are those of the same file with that row deleted."""
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    i = _rows(text, "alignment")[0]
+    (d / "readings.csv").write_text(_edit(text, i, "sd_x", "250"), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 0, cap.err
+    res = _results(tmp_path)
+    f = [f for f in res["findings"] if f["code"] == "sd-departs"]
+    assert len(f) == 1 and f[0]["action"] == "set_aside" and f[0]["line"] == i + 1, f
+    assert f[0]["column"] == "sd_x"
+    un = res["unused_readings"]
+    assert [(u["line"], u["column"], u["reason"]) for u in un] == \
+        [(i + 1, "sd_x", f[0]["message"])]
+    (d / "readings.csv").write_text(_delete(text, i), encoding="utf-8")
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "del")]) == 0
+    deleted = _results(tmp_path, "del")
+    for key in ("M_xx", "M_yx", "M_xy", "b_x", "b_y", "S_yx"):
+        assert _value(res, key) == _value(deleted, key), key
+
+
+@pytest.mark.parametrize("column", ["out_z", "sensor_c"])
+def test_ramp_row_typo_is_set_aside_as_the_file_without_it(sim, tmp_path, capsys, column):
+    """Before: a ramp block's out_z with two digits transposed (4.08 → 40.8) or its sensor_c
+    negated changed the ramp analysis the certificate states (the soak model's error on the
+    ramps, the lag, the hysteresis) and was listed nowhere. Now set aside
+    (``ramp-departs``), in unused_readings; the ramp analysis is that of the file with the
+    row deleted."""
+    d = _copy(sim, tmp_path)
+    text = (d / "thermal.csv").read_text(encoding="utf-8")
+    ramps = [i for i in _rows(text, "thermal") if ",ramp," in text.split("\n")[i]]
+    i = ramps[len(ramps) // 2]
+    header = next(ln for ln in text.split("\n") if ln.startswith("test,")).split(",")
+    v = text.split("\n")[i].split(",")[header.index(column)]
+    bad = f"{10 * float(v):.6f}" if column == "out_z" else "-" + v
+    (d / "thermal.csv").write_text(_edit(text, i, column, bad), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 0, cap.err
+    res = _results(tmp_path)
+    f = [f for f in res["findings"] if f["code"] == "ramp-departs"]
+    assert len(f) == 1 and f[0]["action"] == "set_aside" and f[0]["line"] == i + 1, f
+    assert f[0]["column"] == column and f[0]["file"].endswith("thermal.csv")
+    un = res["unused_readings"]
+    assert [(u["line"], u["phase"], u["reason"]) for u in un] == [(i + 1, "ramp", f[0]["message"])]
+    (d / "thermal.csv").write_text(_delete(text, i), encoding="utf-8")
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "del")]) == 0
+    deleted = _results(tmp_path, "del")
+    ramp = res["extra"]["thermal_model"]["channels"]["z"]["ramp"]
+    assert ramp == deleted["extra"]["thermal_model"]["channels"]["z"]["ramp"]
+    for key in ("ARW_z_t1", "K_z_t2_v1", "b_z_t2_v1"):
+        assert _value(res, key) == _value(deleted, key), key
+
+
+def test_rows_set_aside_by_screening_are_unused_readings(sim, tmp_path, capsys):
+    """Before: the supply typo and the static spike set aside were findings only;
+    results.json's unused_readings was empty. Now each is listed there (file, line, test,
+    step, phase, column, reason), the reason the finding's message."""
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    s = _rows(text, "static")[5000]
+    (d / "readings.csv").write_text(_edit(text, s, "out_x", "1000"), encoding="utf-8")
+    th = (d / "thermal.csv").read_text(encoding="utf-8")
+    t = _rows(th, "thermal")[100]
+    (d / "thermal.csv").write_text(_edit(th, t, "supply_v", "50"), encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    assert rc == 0, cap.err
+    res = _results(tmp_path)
+    aside = {(f["file"], f["line"]): f for f in res["findings"] if f["action"] == "set_aside"}
+    got = {(u["file"], u["line"]): u for u in res["unused_readings"]}
+    assert got.keys() == aside.keys() and len(got) == 2
+    for k, u in got.items():
+        assert u["reason"] == aside[k]["message"] and u["column"] == aside[k]["column"]
+    assert got[(str(d / "readings.csv"), s + 1)]["test"] == "static"
+    u = got[(str(d / "thermal.csv"), t + 1)]
+    assert (u["test"], u["phase"], u["column"]) == ("thermal", "soak", "supply_v")
+    assert u["step"] == int(th.split("\n")[t].split(",")[1])

@@ -858,6 +858,33 @@ def without_set_aside(r: TriadReadings, findings) -> TriadReadings:
                    aside=r.aside | frozenset(int(f.line) for f in mine))
 
 
+def unused_readings(findings, *readings: TriadReadings | None) -> list[dict]:
+    """results.json's ``unused_readings``: one row per line a ``set_aside`` finding took out
+    of the readings (screening, an inconsistent dwell), in the file's order — ``file``,
+    ``line``, the row's ``test``, ``step`` and ``phase``, the ``column`` the rule judged and
+    the finding's message as ``reason`` (the rows set aside are findings and are listed
+    as readings no item used, as ``unused_readings`` lists them for every specification)."""
+    rows = {}
+    for r in readings:
+        if r is None:
+            continue
+        file = None if r.path is None else str(r.path)
+        for rec in r.data[["line", "test", "step", "phase"]].itertuples(index=False):
+            rows[(file, int(rec.line))] = rec
+    out, seen = [], set()
+    for f in findings:
+        if f.action != "set_aside" or f.line is None or (f.file, f.line) in seen:
+            continue
+        seen.add((f.file, f.line))
+        rec = rows.get((f.file, int(f.line)))
+        out.append({"file": f.file, "line": int(f.line),
+                    "test": f.test if rec is None else str(rec.test),
+                    "step": None if rec is None else int(rec.step),
+                    "phase": None if rec is None else str(rec.phase),
+                    "column": f.column, "reason": f.message})
+    return sorted(out, key=lambda u: (str(u["file"]), u["line"]))
+
+
 def refuse(findings) -> list:
     """The findings, after raising the first refused one as a GonioError naming its file and
     line (the readings stop there)."""
@@ -896,6 +923,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     screened = findings is not None
     # refused readings stop here, naming the line
     findings = refuse(findings) if screened else check(r)
+    given = r
     r = without_set_aside(r, findings)
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
@@ -918,6 +946,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     tr = _thermal_readings(r, thermal)
     if tr is not None and tr is not r and not screened:
         findings += check(tr)
+    given_thermal = tr
     if tr is not None:
         tr = without_set_aside(tr, findings)
     th = None
@@ -956,6 +985,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
                             extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
                             covariances=alignment_covariances(al), findings=list(findings),
+                            unused_readings=unused_readings(findings, given, given_thermal),
                             tables=prediction_tables(extra["thermal_model"]))
 
 

@@ -29,6 +29,10 @@ departs is set aside instead (the calibration drops its line and states the find
   (:func:`_thermal_settings`); the calibration fits without it.
 - **static spike** (set aside) — a sample of the static record beyond the rate
   specifications' Hampel limit (:func:`_static_outliers`); refused when more than 5 %.
+- **dwell sd departs** (set aside) — an alignment or thermal row whose ``sd_*`` stands far
+  above the others of its test (:func:`_sd_outliers`): a record disturbed inside.
+- **ramp block departs** (set aside) — a thermal ramp block off the line of its
+  neighbouring blocks in an output, a temperature or the supply (:func:`_ramp_outliers`).
 """
 
 from __future__ import annotations
@@ -295,6 +299,154 @@ def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
     return [out[k] for k in sorted(out)]
 
 
+#: Robust threshold of the sd rule, in units of 1.4826·MAD (the rate specifications'
+#: K_ROBUST for a setting that departs from its segment), and its floor as a ratio to the
+#: median sd (a sample sd of tens of samples or more is never twice its kind's by chance).
+SD_K_ROBUST, SD_MIN_RATIO = 10.0, 2.0
+
+
+def _sd_outliers(df: pd.DataFrame, file) -> list[Finding]:
+    """``sd-departs`` (set aside): a row whose ``sd_*`` stands far above the others of its
+    kind — above the median sd of that channel over the rows of two samples or more of its
+    test (alignment; thermal) by more than 10·1.4826·MAD, and above twice that median. A record's sd is its noise; one far
+    above its neighbours' is a record disturbed inside (a spike or a step among its
+    samples, which moves its mean too): the row is set aside as the rate specifications set
+    aside an output that departs from its segment, and the results rest on the other rows
+    (those of the file with the row deleted). Only the upper side: a low sd (0 from a filled
+    column) moves no mean and weighs nothing (the fit weighs dwells by n_samples). More than
+    2 (and 10 %) of a test's rows: refused, the column is not what the rows state."""
+    out: list[Finding] = []
+    for test in ("alignment", "thermal"):
+        g = df[(df["test"].astype(str) == test) & (df["n_samples"] >= 2)]
+        found: dict[int, Finding] = {}
+        for c in (f"sd_{a}" for a in _AXES):
+            if c not in g:
+                continue
+            v = g[c].to_numpy(float)
+            ok = np.isfinite(v)
+            if ok.sum() < 5:
+                continue
+            med = float(np.median(v[ok]))
+            lim = max(med + SD_K_ROBUST * 1.4826 * float(np.median(np.abs(v[ok] - med))),
+                      SD_MIN_RATIO * med)
+            for i in np.flatnonzero(ok & (v > lim)):
+                row = g.iloc[i]
+                found.setdefault(int(row["line"]), Finding(
+                    "sd-departs", f"{test} step {int(row['step'])}: {c} {v[i]:.10g} stands far "
+                    f"above the {test} rows' median {med:.4g} (limit {lim:.4g}): a record "
+                    "disturbed inside — set aside; the results rest on the other rows",
+                    "set_aside", file=file, line=int(row["line"]), column=c, test=test,
+                    clause="triad screening",
+                    rule=f"sd ≤ max(median + {SD_K_ROBUST:g}·1.4826·MAD, {SD_MIN_RATIO:g}·median) "
+                         "of the test's rows"))
+        rows = [found[k] for k in sorted(found)]
+        if len(rows) > max(DEPART_MAX_ROWS, DEPART_SHARE * len(g)):
+            f = rows[0]
+            rows = [Finding(**{**f.to_json(), "action": "refused", "message":
+                               f"{len(rows)} of the {len(g)} {test} rows have an sd far above "
+                               f"the others (the first here: {f.message}): not disturbed "
+                               "records to set aside — the sd columns are not as stated"})]
+        out += rows
+    return out
+
+
+#: The ramp rule: half-width (rows) of the local line each ramp block is judged against,
+#: its threshold in robust σ of the run (the rate specifications' K_SPIKE for a record
+#: that follows a smooth trend), and the shortest ramp run it judges.
+RAMP_HALF_WINDOW, RAMP_K, RAMP_MIN_ROWS = 3, 15.0, 5
+#: Floors of the ramp rule per column: a temperature 1 °C (the soak rows' chamber
+#: tolerance), a supply 0.01 V + 0.2 % (theirs); an output none (its scale is its noise).
+RAMP_FLOOR = {"chamber_c": (CHAMBER_TOL_C, 0.0), "sensor_c": (CHAMBER_TOL_C, 0.0),
+              "supply_v": (SUPPLY_TOL_V, SUPPLY_TOL_REL)}
+
+
+def ramp_departures(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """d_i = y_i − the local line of its neighbours (the rows within
+    :data:`RAMP_HALF_WINDOW` of i, i left out): slope the median of their pairwise slopes,
+    level the median of their values carried to t_i along it (Theil–Sen: a spike among the
+    neighbours moves neither). A ramp block follows the chamber smoothly, so a block off
+    that line by many times the run's own scatter is a typo, not the gyro.
+
+    >>> t = np.arange(10.0)
+    >>> y = 2.0 * t; y[4] = 80.0
+    >>> [int(i) for i in np.flatnonzero(np.abs(ramp_departures(t, y)) > 1)]
+    [4]
+    """
+    d = np.empty(y.size)
+    for i in range(y.size):
+        j = [k for k in range(max(0, i - RAMP_HALF_WINDOW), min(y.size, i + RAMP_HALF_WINDOW + 1))
+             if k != i]
+        tj, yj = t[j], y[j]
+        dt = tj[:, None] - tj[None, :]
+        pair = np.triu(np.ones(dt.shape, bool), 1) & (dt != 0)
+        slope = float(np.median((yj[:, None] - yj[None, :])[pair] / dt[pair])) if pair.any() else 0.0
+        d[i] = y[i] - float(np.median(yj + slope * (t[i] - tj)))
+    return d
+
+
+def _ramp_worst(t: np.ndarray, y: np.ndarray, floor: tuple[float, float]
+                ) -> list[tuple[int, float, float]]:
+    """(index, d, limit) of each block of one ramp run beyond the ramp rule's limit, worst
+    first: the worst block is taken out and the rest judged again, so that a typo does not
+    tilt the line its neighbours are judged against."""
+    keep = np.arange(y.size)
+    out = []
+    while keep.size >= RAMP_MIN_ROWS and len(out) < y.size // 2:
+        d = ramp_departures(t[keep], y[keep])
+        lim = np.maximum(RAMP_K * 1.4826 * float(np.median(np.abs(d))),
+                         floor[0] + floor[1] * np.abs(y[keep]))
+        k = int(np.argmax(np.abs(d) / np.where(lim > 0, lim, np.inf)))
+        if not abs(d[k]) > lim[k]:
+            break
+        out.append((int(keep[k]), float(d[k]), float(lim[k])))
+        keep = np.delete(keep, k)
+    return out
+
+
+def _ramp_outliers(df: pd.DataFrame, file) -> list[Finding]:
+    """``ramp-departs`` (set aside): a ramp row (thermal, ``phase`` ramp) whose output,
+    chamber or sensor temperature or supply stands off the local line of its run's
+    neighbouring blocks (:func:`ramp_departures`) by more than 15·1.4826·the run's median
+    |d| (at least :data:`RAMP_FLOOR`). The ramp blocks feed the ramp analysis the
+    certificate states (the soak model's error on the ramps, the lag τ, the hysteresis,
+    the compensation before and after): screened as the soak rows are, set aside and named,
+    the analysis then that of the file with the row deleted. Runs of fewer than
+    :data:`RAMP_MIN_ROWS` rows are not judged. More than 2 (and 10 %) of the ramp rows:
+    refused."""
+    th = df[df["test"].astype(str) == "thermal"]
+    if not len(th):
+        return []
+    run = ((th["phase"] != th["phase"].shift()) | (th["up"] != th["up"].shift())).cumsum()
+    ramp = (th["phase"].astype(str) == "ramp").to_numpy()
+    found: dict[int, Finding] = {}
+    for _, g in th[ramp].groupby(run[ramp], sort=False):
+        if len(g) < RAMP_MIN_ROWS:
+            continue
+        t = g["time_s"].to_numpy(float)
+        for c in OUT + ("chamber_c", "sensor_c", "supply_v"):
+            y = g[c].to_numpy(float)
+            if not np.all(np.isfinite(y)):
+                continue
+            for i, dev, lim in _ramp_worst(t, y, RAMP_FLOOR.get(c, (0.0, 0.0))):
+                row = g.iloc[i]
+                found.setdefault(int(row["line"]), Finding(
+                    "ramp-departs", f"thermal ramp step {int(row['step'])}: {c} {y[i]:.10g} "
+                    f"departs from the line of its neighbouring ramp blocks by {dev:+.4g} "
+                    f"(limit {lim:.3g}) — set aside; the ramp analysis rests on the other "
+                    "blocks", "set_aside", file=file, line=int(row["line"]), column=c,
+                    test="thermal", clause="triad screening",
+                    rule=f"|y − local line of ±{RAMP_HALF_WINDOW} blocks| ≤ max({RAMP_K:g}·1.4826·"
+                         "median |d| of the run, floor)"))
+    rows = [found[k] for k in sorted(found)]
+    if len(rows) > max(DEPART_MAX_ROWS, DEPART_SHARE * int(ramp.sum())):
+        f = rows[0]
+        return [Finding(**{**f.to_json(), "action": "refused", "message":
+                           f"{len(rows)} of the {int(ramp.sum())} thermal ramp rows depart "
+                           f"from the line of their neighbours (the first here: {f.message}): "
+                           "not typos to set aside — the ramp rows are not as stated"})]
+    return rows
+
+
 def screen(readings, protocol=None) -> list[Finding]:
     """Every finding on a triad readings file (:class:`gonio.specs.triad_alignment.readings.TriadReadings`)."""
     df = readings.data
@@ -302,7 +454,8 @@ def screen(readings, protocol=None) -> list[Finding]:
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
             + _one_temperature(df, file) + _step_gaps(df, file)
             + _no_static_record(df, file) + _one_sample_dwells(df, file)
-            + _thermal_settings(df, file) + _static_outliers(df, file))
+            + _thermal_settings(df, file) + _static_outliers(df, file)
+            + _sd_outliers(df, file) + _ramp_outliers(df, file))
 
 
 def check(readings, protocol=None) -> list[Finding]:
