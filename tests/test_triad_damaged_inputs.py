@@ -273,3 +273,30 @@ def test_rows_set_aside_by_screening_are_unused_readings(sim, tmp_path, capsys):
     u = got[(str(d / "thermal.csv"), t + 1)]
     assert (u["test"], u["phase"], u["column"]) == ("thermal", "soak", "supply_v")
     assert u["step"] == int(th.split("\n")[t].split(",")[1])
+
+
+def test_static_record_with_many_moderate_spikes_is_refused(sim, tmp_path, capsys):
+    """Before: 1 % of the static record's out_x raised by 6 σ (each below the Hampel limit
+    of 8 σ that sets one sample aside) passed, the Allan floor raised with them. Now the
+    record is refused as a rate specification's record is (the shared tail rule), naming a
+    spiked sample."""
+    import numpy as np
+
+    d = _copy(sim, tmp_path)
+    text = (d / "readings.csv").read_text(encoding="utf-8")
+    rows = _rows(text, "static")
+    lines = text.split("\n")
+    header = next(ln for ln in lines if ln.startswith("test,")).split(",")
+    k = header.index("out_x")
+    y = np.array([float(lines[i].split(",")[k]) for i in rows])
+    sigma = 1.4826 * float(np.median(np.abs(np.diff(y)))) / np.sqrt(2)
+    hit = sorted(np.random.default_rng(1).choice(len(rows), len(rows) // 100,
+                                                 replace=False).tolist())
+    for j in hit:
+        text = _edit(text, rows[j], "out_x", repr(float(y[j] + 6 * sigma)))
+    (d / "readings.csv").write_text(text, encoding="utf-8")
+    rc, cap = _calibrate(d, tmp_path, capsys)
+    err = _one_line_refusal(rc, cap, "column out_x: static record: out_x:")
+    assert "lie beyond 5 robust σ of the running median" in err and "damaged" in err
+    line = int(err.split("readings.csv:")[1].split(":")[0])
+    assert line - 1 in {rows[j] for j in hit}

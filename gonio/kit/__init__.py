@@ -24,7 +24,9 @@ Uncertainty (GUM, Monte Carlo)  :func:`gum`, :func:`monte_carlo_validation`,
 The statement rule              :func:`state`, :func:`item_statement`,
                                 :class:`Statement`
 Screening                       :class:`Finding`, :data:`ACTIONS`,
-                                :func:`set_aside`
+                                :func:`set_aside`, :func:`hampel_residuals`,
+                                :func:`too_many_outliers`, :func:`moderate_tail`,
+                                :data:`HAMPEL_MIN_ROWS`, :data:`DENSE_SHARE`, :data:`K_TAIL`
 Allan deviation and its edf     :func:`allan_deviation`,
                                 :func:`modified_allan_deviation`,
                                 :func:`hadamard_deviation`,
@@ -46,6 +48,8 @@ from gonio.analysis.coverage import coverage, spawn_seed, two_sided
 from gonio.analysis.noise import (AllanResult, allan_deviation, averaging_factors,
                                   chi2_interval, edf_for, hadamard_deviation,
                                   modified_allan_deviation, noise_id_lag1, total_deviation)
+from gonio.analysis.outliers import (DENSE_SHARE, HAMPEL_MIN_ROWS, K_TAIL, hampel_residuals,
+                                     moderate_tail, too_many_outliers)
 from gonio.errors import GonioError
 from gonio.kit.items import ItemDef, calibrate_items
 from gonio.result.findings import ACTIONS, Finding, set_aside
@@ -60,13 +64,15 @@ from gonio.specs import (CONTENT_FIELDS, FIGURE_ROLES, ITEM_RENDERER, Coverage,
 from uncertainty import InputQuantity, from_u, type_a, type_b
 
 __all__ = [
-    "ACTIONS", "AllanResult", "CONTENT_FIELDS", "Coverage", "Covariance", "FIGURE_ROLES",
-    "Finding", "GonioError", "ITEM_RENDERER", "InputQuantity", "Item", "ItemDef", "Result",
+    "ACTIONS", "AllanResult", "CONTENT_FIELDS", "Coverage", "Covariance", "DENSE_SHARE",
+    "FIGURE_ROLES", "Finding", "GonioError", "HAMPEL_MIN_ROWS", "ITEM_RENDERER", "K_TAIL", "InputQuantity", "Item", "ItemDef", "Result",
     "Specification", "Statement", "Uncertainty", "allan_deviation", "available",
     "averaging_factors", "budget_row", "calibrate_items", "chi2_interval", "coverage",
     "dispersion_bound_statement", "dispersion_uncertainty",
-    "edf_for", "from_u", "get", "gum", "hadamard_deviation", "item_order", "item_statement",
-    "lazy", "modified_allan_deviation", "monte_carlo_validation", "noise_id_lag1",
+    "edf_for", "from_u", "get", "gum", "hadamard_deviation", "hampel_residuals", "item_order",
+    "item_statement",
+    "lazy", "moderate_tail", "modified_allan_deviation", "monte_carlo_validation",
+    "noise_id_lag1",
     "not_measured", "set_aside", "spawn_seed", "state", "std_dev_uncertainty",
-    "total_deviation", "two_sided", "type_a", "type_b",
+    "too_many_outliers", "total_deviation", "two_sided", "type_a", "type_b",
 ]

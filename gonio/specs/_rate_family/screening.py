@@ -66,6 +66,9 @@ import numpy as np
 import pandas as pd
 from scipy.ndimage import median_filter
 
+from gonio.analysis.outliers import (DENSE_SHARE, HAMPEL_MIN_ROWS, HAMPEL_WINDOW, K_TAIL,
+                                     TAIL_MIN_ROWS, TAIL_P, TAIL_SHARE, hampel_residuals,
+                                     moderate_tail, quantum, quantum_floor, too_many_outliers)
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings
 from gonio.result.findings import Finding
@@ -110,64 +113,12 @@ def spike_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r[0], r[-1] = y[0] - y[1], y[-1] - y[-2]
     local = np.maximum(median_filter(np.abs(r), size=21, mode="nearest"),
                        float(np.median(np.abs(r))))
-    return r, np.maximum(K_SPIKE * 1.4826 * local, _quantum_floor(y))
+    return r, np.maximum(K_SPIKE * 1.4826 * local, quantum_floor(y))
 
 
-#: Window (samples) of the running median of the Hampel rule, and of the local scale; its
-#: threshold in robust σ (8σ: a normal sample exceeds it with probability 10⁻¹⁵).
-HAMPEL_WINDOW, SCALE_WINDOW, K_HAMPEL = 21, 101, 8.0
-#: Segments of fewer rows (rate points) are screened against their median instead: the local
-#: scale of a running median is not reliable over a few tens of samples.
-HAMPEL_MIN_ROWS = 200
-#: Largest share of a segment's outputs the screening sets aside; above it (and at least
-#: DENSE_MIN_ROWS rows) the record is refused: a record that full of outliers is damaged
-#: (a loose connector, a logger fault), and what is left of it is not a sample of the gyro.
-DENSE_SHARE, DENSE_MIN_ROWS = 0.05, 3
 #: Segments shorter than this are not refused as a whole (a rate point of a few samples:
 #: its outliers are set aside one by one; a noise-free point has no scale to judge by).
 DENSE_MIN_SEGMENT = 20
-
-
-def _quantum(y: np.ndarray) -> float:
-    """The output's resolution: its smallest non-zero step (0 for a constant)."""
-    steps = np.abs(np.diff(y))
-    return float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
-
-
-def _quantum_floor(y: np.ndarray) -> float:
-    return max(3.0 * _quantum(y), 1e-9 * (1.0 + float(np.max(np.abs(y)))))
-
-
-def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(d, limit) per sample of a record (bias records full of
-    ±1000 spikes gave B_s = 48 ± 9 °/h for 19 with no finding — the second-difference rule's
-    local scale, median |r|, is itself made of spikes once they are dense):
-    d_i = y_i − median(y over the 21 samples around i), limit_i = 8·1.4826·max(median |d|
-    over the 101 samples around i, the segment's median |d|; where the output is quantised
-    so coarsely that the median |d| is below one quantum, at least the rms of min(|d|, 5
-    quanta): a clean record at 0.5 LSB noise was refused), floored at 3 quanta of the
-    output and 10⁻⁹ of its size. The running median follows a smooth trend (a warm-up
-    transient) and ignores up to 10 spikes among 21 samples; the scale is made of the
-    good samples as long as they are the majority.
-
-    >>> rng = np.random.default_rng(0)
-    >>> y = rng.normal(0, 1, 400) + 50 * np.exp(-np.arange(400) / 60)
-    >>> bad = rng.choice(400, 60, replace=False)                 # 15 % of the samples
-    >>> y[bad] += rng.choice([-1000.0, 1000.0], 60)
-    >>> d, lim = hampel_residuals(y)
-    >>> sorted(np.flatnonzero(np.abs(d) > lim).tolist()) == sorted(bad.tolist())
-    True
-    """
-    d = y - median_filter(y, size=HAMPEL_WINDOW, mode="nearest")
-    a = np.abs(d)
-    local = np.maximum(median_filter(a, size=SCALE_WINDOW, mode="nearest"), float(np.median(a)))
-    scale = 1.4826 * local
-    q = _quantum(y)
-    if q > 0 and 1.4826 * float(np.median(a)) < q:
-        # coarse quantisation (noise ≲ 1 quantum): most d are exactly 0 and the median |d|
-        # collapses; σ from the rms of |d| winsorised at 5 quanta (the rounding's q²/12 in it)
-        scale = np.maximum(scale, math.sqrt(float(np.mean(np.minimum(a, 5.0 * q) ** 2))))
-    return d, np.maximum(K_HAMPEL * scale, _quantum_floor(y))
 
 
 def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> list[Finding]:
@@ -182,7 +133,7 @@ def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> l
         r = y - np.median(y)
         own = float(np.median(np.abs(r))) if y.size >= 8 else 0.0
         lim = np.full(y.size, max(K_ROBUST * 1.4826 * max(float(pooled or 0.0), own),
-                                  _quantum_floor(y) if y.size >= 8 else 0.0,
+                                  quantum_floor(y) if y.size >= 8 else 0.0,
                                   1e-9 * (1.0 + float(np.max(np.abs(y))))))
         rule = "|y − median| > 10·1.4826·max(MAD, pooled MAD of the test's segments < 8 rows)"
     elif hampel:                # a record or rate point: against its running median
@@ -199,15 +150,14 @@ def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> l
             out.append(_finding("output-outlier", f"{col} {y[i]:.10g} departs from its "
                                 f"neighbours by {r[i]:+.4g} (limit {lim[i]:.3g})",
                                 df.iloc[idx[i]], col, file, clauses, rule))
-    if y.size >= DENSE_MIN_SEGMENT and len(out) >= DENSE_MIN_ROWS \
-            and len(out) > DENSE_SHARE * y.size:
+    if y.size >= DENSE_MIN_SEGMENT and too_many_outliers(len(out), y.size):
         return [_damaged(df, idx, np.abs(r) > lim, col, file, clauses,
                          f"{len(out)} of its {y.size} {col} values are outliers (more than "
                          f"{DENSE_SHARE:.0%}, the first here)",
                          f"outliers > {DENSE_SHARE:.0%} of a segment's rows")]
     if hampel:                  # many below the row limit: a tail no normal record has
-        tail = (np.abs(r) > (K_TAIL / K_HAMPEL) * lim) & (np.abs(r) <= lim)
-        if tail.sum() >= max(TAIL_MIN_ROWS, TAIL_SHARE * y.size):
+        tail = moderate_tail(r, lim)
+        if tail is not None:
             return [_damaged(df, idx, tail, col, file, clauses,
                              f"{int(tail.sum())} of its {y.size} {col} values lie beyond "
                              f"{K_TAIL:g} robust σ of the running median (a normal record of "
@@ -215,13 +165,6 @@ def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> l
                              f"count of |y − running median| > {K_TAIL:g}·1.4826·local MAD "
                              f"≥ max({TAIL_MIN_ROWS}, {TAIL_SHARE:g}·n)")]
     return out
-
-
-#: The tail rule of a record: at least max(5, 0.1 % of its rows) beyond 5 robust σ (a normal
-#: sample has a share 5.7·10⁻⁷ there; rows beyond the 8σ limit are set aside, not counted) —
-#: spikes dense but each below the 8σ row limit (±1 mV
-#: on 5 % of a bias record: B_s 62 for 46 °/h) are refused with the record.
-K_TAIL, TAIL_MIN_ROWS, TAIL_SHARE, TAIL_P = 5.0, 5, 1e-3, 5.7e-7
 
 
 def _damaged(df, idx, mask, col, file, clauses, what: str, rule: str) -> Finding:
@@ -436,7 +379,7 @@ def quantisation_rule(df: pd.DataFrame, file=None, clauses: dict | None = None
         if test in seen or test == "vibration" or idx.size < HAMPEL_MIN_ROWS:
             continue
         y = y_all[idx]
-        q = _quantum(y)
+        q = quantum(y)
         if not (q > 0 and np.all(np.isfinite(y))):
             continue
         sigma = 1.4826 * float(np.median(np.abs(

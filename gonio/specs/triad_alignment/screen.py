@@ -27,8 +27,9 @@ departs is set aside instead (the calibration drops its line and states the find
 - **set point departs** (set aside) — a thermal soak row whose supply, table rate or
   chamber temperature departs from the programme the majority of the soaks hold
   (:func:`_thermal_settings`); the calibration fits without it.
-- **static spike** (set aside) — a sample of the static record beyond the rate
-  specifications' Hampel limit (:func:`_static_outliers`); refused when more than 5 %.
+- **static spike** (set aside) — a sample of the static record beyond the Hampel limit
+  (:func:`_static_outliers`); the record refused when more than 5 % are, or when many
+  moderate spikes lie between 5 robust σ and the limit.
 - **dwell sd departs** (set aside) — an alignment or thermal row whose ``sd_*`` stands far
   above the others of its test (:func:`_sd_outliers`): a record disturbed inside.
 - **ramp block departs** (set aside) — a thermal ramp block off the line of its
@@ -266,36 +267,50 @@ DEPART_MAX_ROWS, DEPART_SHARE = 2, 0.1
 
 def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
     """``output-outlier`` (set aside): a sample of the static record against its running
-    median, the rate specifications' Hampel rule
-    (:func:`gonio.specs._rate_family.screening.hampel_residuals`: one spike of 1000 among
-    values near 11 dominates the Allan deviation the averaging time is read from). The Allan deviation then joins the samples either side of
-    it. More than 5 % (and ≥ 3) of the record: refused, the record is damaged."""
-    from gonio.specs._rate_family.screening import (DENSE_MIN_ROWS, DENSE_SHARE,
-                                                    HAMPEL_MIN_ROWS, hampel_residuals)
+    median, the Hampel rule every record is screened with
+    (:func:`gonio.analysis.outliers.hampel_residuals`: one spike of 1000 among values near 11
+    dominates the Allan deviation the averaging time is read from). The Allan deviation then
+    joins the samples either side of it. The record is refused (``record-damaged``), as a
+    rate specification's record is, when more than 5 % (and ≥ 3) of its samples are beyond
+    the limit (:func:`~gonio.analysis.outliers.too_many_outliers`) or when many lie between
+    5 robust σ and the limit (:func:`~gonio.analysis.outliers.moderate_tail`): dense
+    moderate spikes, each below the limit, raise the Allan deviation's floor and the bias
+    instability with it, and what is left of such a record is not a sample of the gyro."""
+    from gonio.analysis.outliers import (DENSE_SHARE, HAMPEL_MIN_ROWS, K_TAIL, TAIL_P,
+                                         hampel_residuals, moderate_tail, too_many_outliers)
 
     st = df[df["test"].astype(str) == "static"]
     if len(st) < HAMPEL_MIN_ROWS:
         return []
     out: dict[int, Finding] = {}
+    rule = "|y_i − running median (21)| > 8·1.4826·local median |y − running median|"
     for c in OUT:
         y = st[c].to_numpy(float)
         d, lim = hampel_residuals(y)
         bad = np.flatnonzero(np.abs(d) > lim)
-        action = "set_aside"
-        if bad.size >= DENSE_MIN_ROWS and bad.size > DENSE_SHARE * y.size:
-            bad, action = bad[:1], "refused"
+        tail = None if too_many_outliers(bad.size, y.size) else moderate_tail(d, lim)
+        if too_many_outliers(bad.size, y.size) or tail is not None:
+            i = int(bad[0] if tail is None else np.flatnonzero(tail)[0])
+            what = (f"{bad.size} of its {y.size} samples are outliers (more than "
+                    f"{DENSE_SHARE:.0%})" if tail is None else
+                    f"{int(tail.sum())} of its {y.size} samples lie beyond {K_TAIL:g} robust σ "
+                    f"of the running median (a normal record of this length has "
+                    f"{y.size * TAIL_P:.2g})")
+            ln = int(st["line"].iloc[i])
+            return [Finding("record-damaged", f"static record: {c}: {what}, the first here "
+                            f"({y[i]:.10g}): the record is damaged, not a sample of the gyro",
+                            "refused", file=file, line=ln, column=c, test="static",
+                            clause="triad screening",
+                            rule=rule if tail is None else
+                            f"count of |y − running median| > {K_TAIL:g}·1.4826·local MAD "
+                            "≥ max(5, 0.001·n)")]
         for i in bad:
             ln = int(st["line"].iloc[i])
-            what = (f"static record: {c} {y[i]:.10g} departs from its running median by "
-                    f"{d[i]:+.4g} (limit {lim[i]:.3g})")
-            what += (" — set aside; the Allan deviation joins the samples either side"
-                     if action == "set_aside" else
-                     f"; {np.sum(np.abs(d) > lim)} of its {y.size} samples are outliers (more "
-                     f"than {DENSE_SHARE:.0%}): the record is damaged")
-            out.setdefault(ln, Finding("output-outlier", what, action, file=file, line=ln,
-                                       column=c, test="static", clause="triad screening",
-                                       rule="|y_i − running median (21)| > 8·1.4826·local "
-                                            "median |y − running median|"))
+            out.setdefault(ln, Finding(
+                "output-outlier", f"static record: {c} {y[i]:.10g} departs from its running "
+                f"median by {d[i]:+.4g} (limit {lim[i]:.3g}) — set aside; the Allan deviation "
+                "joins the samples either side", "set_aside", file=file, line=ln, column=c,
+                test="static", clause="triad screening", rule=rule))
     return [out[k] for k in sorted(out)]
 
 
