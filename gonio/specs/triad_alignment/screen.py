@@ -320,40 +320,55 @@ def _static_outliers(df: pd.DataFrame, file) -> list[Finding]:
 SD_K_ROBUST, SD_MIN_RATIO = 10.0, 2.0
 
 
+def _sd_kinds(g: pd.DataFrame, axis: str) -> np.ndarray:
+    """Per row, its kind for gyro ``axis``'s sd: 0 at rest, 1 rotating about that gyro's own
+    axis, 2 rotating about another (the table's rotation modulates the other gyros' outputs
+    by the Earth rate and the cross-coupling over each revolution, not its own)."""
+    rot = g["rate_dps"].to_numpy(float) != 0
+    own = g["up"].astype(str).str[-1].to_numpy() == axis
+    return np.where(~rot, 0, np.where(own, 1, 2))
+
+
 def _sd_outliers(df: pd.DataFrame, file) -> list[Finding]:
     """``sd-departs`` (set aside): a row whose ``sd_*`` stands far above the others of its
-    kind — above the median sd of that channel over the rows of two samples or more of its
-    test (alignment; thermal) by more than 10·1.4826·MAD, and above twice that median. A record's sd is its noise; one far
-    above its neighbours' is a record disturbed inside (a spike or a step among its
-    samples, which moves its mean too): the row is set aside as the rate specifications set
-    aside an output that departs from its segment, and the results rest on the other rows
-    (those of the file with the row deleted). Only the upper side: a low sd (0 from a filled
-    column) moves no mean and weighs nothing (the fit weighs dwells by n_samples). More than
-    2 (and 10 %) of a test's rows: refused, the column is not what the rows state."""
+    kind — the rows of two samples or more of its test (alignment; thermal) at rest, or
+    rotating about that gyro's axis, or about another (:func:`_sd_kinds`) — above their
+    median sd by more than 10·1.4826·MAD, and above twice that median (and 10⁻⁹ of the
+    output's size). A record's sd is its noise; one far above its kind's is a record
+    disturbed inside (a spike or a step among its samples, which moves its mean too): the
+    row is set aside as the rate specifications set aside an output that departs from its
+    segment, and the results rest on the other rows (those of the file with the row
+    deleted). Kinds of fewer than 4 rows are not judged. Only the upper side: a low sd (0
+    from a filled column) moves no mean and weighs nothing (the fit weighs dwells by
+    n_samples). More than 2 (and 10 %) of a test's rows: refused, the column is not what
+    the rows state."""
     out: list[Finding] = []
     for test in ("alignment", "thermal"):
         g = df[(df["test"].astype(str) == test) & (df["n_samples"] >= 2)]
         found: dict[int, Finding] = {}
-        for c in (f"sd_{a}" for a in _AXES):
-            if c not in g:
-                continue
+        for a in _AXES:
+            c = f"sd_{a}"
             v = g[c].to_numpy(float)
-            ok = np.isfinite(v)
-            if ok.sum() < 5:
-                continue
-            med = float(np.median(v[ok]))
-            lim = max(med + SD_K_ROBUST * 1.4826 * float(np.median(np.abs(v[ok] - med))),
-                      SD_MIN_RATIO * med)
-            for i in np.flatnonzero(ok & (v > lim)):
-                row = g.iloc[i]
-                found.setdefault(int(row["line"]), Finding(
-                    "sd-departs", f"{test} step {int(row['step'])}: {c} {v[i]:.10g} stands far "
-                    f"above the {test} rows' median {med:.4g} (limit {lim:.4g}): a record "
-                    "disturbed inside — set aside; the results rest on the other rows",
-                    "set_aside", file=file, line=int(row["line"]), column=c, test=test,
-                    clause="triad screening",
-                    rule=f"sd ≤ max(median + {SD_K_ROBUST:g}·1.4826·MAD, {SD_MIN_RATIO:g}·median) "
-                         "of the test's rows"))
+            kind = _sd_kinds(g, a)
+            size = 1e-9 * (1.0 + float(np.nanmax(np.abs(g[f"out_{a}"].to_numpy(float)),
+                                                 initial=0.0)))
+            for k in range(3):
+                ok = np.isfinite(v) & (kind == k)
+                if ok.sum() < 4:
+                    continue
+                med = float(np.median(v[ok]))
+                lim = max(med + SD_K_ROBUST * 1.4826 * float(np.median(np.abs(v[ok] - med))),
+                          SD_MIN_RATIO * med, size)
+                for i in np.flatnonzero(ok & (v > lim)):
+                    row = g.iloc[i]
+                    found.setdefault(int(row["line"]), Finding(
+                        "sd-departs", f"{test} step {int(row['step'])}: {c} {v[i]:.10g} stands "
+                        f"far above the median {med:.4g} of its kind (limit {lim:.4g}): a "
+                        "record disturbed inside — set aside; the results rest on the other "
+                        "rows", "set_aside", file=file, line=int(row["line"]), column=c,
+                        test=test, clause="triad screening",
+                        rule=f"sd ≤ max(median + {SD_K_ROBUST:g}·1.4826·MAD, "
+                             f"{SD_MIN_RATIO:g}·median) of the rows of its kind"))
         rows = [found[k] for k in sorted(found)]
         if len(rows) > max(DEPART_MAX_ROWS, DEPART_SHARE * len(g)):
             f = rows[0]
