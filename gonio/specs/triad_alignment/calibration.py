@@ -862,8 +862,8 @@ def unused_readings(findings, *readings: TriadReadings | None) -> list[dict]:
     """results.json's ``unused_readings``: one row per line a ``set_aside`` finding took out
     of the readings (screening, an inconsistent dwell), in the file's order — ``file``,
     ``line``, the row's ``test``, ``step`` and ``phase``, the ``column`` the rule judged and
-    the finding's message as ``reason`` (the rows set aside are findings and are listed
-    as readings no item used, as ``unused_readings`` lists them for every specification)."""
+    the finding's message as ``reason`` (a row set aside is a finding and a reading no item
+    used: results.json names it in both, docs/results.schema.json)."""
     rows = {}
     for r in readings:
         if r is None:
