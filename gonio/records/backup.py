@@ -933,8 +933,13 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
     present and matching its SHA-256, every computed calibration's result rows matching its
     stored results.json and, where it was signed, its seal the one signed (at review, at
     approval, on its newest certificate), and a reviewed or approved calibration's details
-    the ones its reviewed draft states (:func:`gonio.records.services.details_changed`), and
-    the rows' consistency (:func:`consistency_problems`); ``files`` False leaves out the
+    the ones its reviewed draft states (:func:`gonio.records.services.details_changed`; an
+    amendment waiting for its issue: what its approval fixed,
+    :func:`gonio.records.services.amendment_problems`), each row against the audit events
+    its state implies (:func:`gonio.records.services.trail_problems`,
+    :func:`gonio.records.services.standard_problems`), the protective triggers
+    (:func:`trigger_problems`) and the rows' consistency (:func:`consistency_problems`);
+    ``files`` False leaves out the
     stored files' digests (checked by the caller). Returns (counts, problems: one line
     each)."""
     from gonio.records import services
@@ -944,14 +949,15 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
     with store.session() as s:
         shas = [r[0] for r in s.execute(select(Blob.sha256))]
         cals = s.execute(select(Calibration.id, Calibration.status, Calibration.reviewed_seal,
-                                Calibration.approved_seal, Calibration.pending_number).where(
+                                Calibration.approved_seal, Calibration.pending_number,
+                                Calibration.pending_replaces_id).where(
             Calibration.results_sha256.is_not(None)).order_by(Calibration.id)).all()
         certs = s.execute(select(Certificate.calibration_id, Certificate.number,
                                  Certificate.seal_sha256).order_by(Certificate.id)).all()
     if files:          # (``files`` False: the caller checked every stored file already)
         problems += [f"stored file {b}" for b in damaged_files(store, shas)]
     newest = {cid: (number, sealed) for cid, number, sealed in certs}
-    for cid, status, reviewed, approved, pending in cals:
+    for cid, status, reviewed, approved, pending, replaces in cals:
         # an approved issue that failed keeps its number and the seal approved: checked too
         waiting = status in ("issuing", "amending") or (status == "failed" and bool(pending))
         try:
@@ -968,15 +974,43 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
                 problems.append(f"calibration {cid}: its stored result no longer matches the "
                                 f"seal of {what}"
                                 f"{services.seal_differences(store, cid, action)}")
-        if status in ("reviewed", "issuing"):     # what was reviewed is what is approved
+        # what was reviewed is what is approved; an amendment waiting for its issue states
+        # what its approval fixed (services.amendment_problems, with the trail below)
+        if status == "reviewed" or (status == "issuing" and not replaces):
             problems += [f"calibration {cid}: {line}"
                          for line in services.details_changed(store, cid)]
     with store.session() as s:                    # each row against its own audit trail
         for cal in s.scalars(select(Calibration).order_by(Calibration.id)):
             problems += [f"calibration {cal.id}: {line}"
                          for line in services.trail_problems(s, cal)]
-    problems += consistency_problems(store)
+        problems += services.standard_problems(s)
+    problems += trigger_problems(store) + consistency_problems(store)
     return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems
+
+
+#: The tables whose rows are inserted and never updated or deleted, each kept so by two
+#: triggers, ``TABLE_no_update`` and ``TABLE_no_delete`` (migrations 0001, 0009, 0010, 0014).
+FROZEN_TABLES = ("audit_events", "certificates", "blobs", "table_calibrations",
+                 "table_calibration_withdrawals", "readings_contents")
+
+
+def trigger_problems(store) -> list[str]:
+    """The protective triggers missing from the database (one line each): every table of
+    :data:`FROZEN_TABLES` has its ``TABLE_no_update`` and ``TABLE_no_delete`` (on
+    PostgreSQL: enabled). Without them
+    the audit trail, an issued certificate or a stored file can be rewritten or deleted
+    with no error, so their absence is a finding, not a detail of the set-up."""
+    from sqlalchemy import text
+
+    with store.session() as s:
+        if s.get_bind().dialect.name == "postgresql":
+            have = set(s.scalars(text("SELECT tgname FROM pg_trigger WHERE NOT tgisinternal "
+                                          "AND tgenabled <> 'D'")))
+        else:
+            have = set(s.scalars(text("SELECT name FROM sqlite_master WHERE type = 'trigger'")))
+    return [f"table {table}: its trigger {table}_no_{verb} is missing (its rows can be "
+            f"{verb}d without an error)" for table in FROZEN_TABLES
+            for verb in ("update", "delete") if f"{table}_no_{verb}" not in have]
 
 
 def consistency_problems(store) -> list[str]:

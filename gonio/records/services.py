@@ -2334,48 +2334,156 @@ def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None
                          "reviews or approves", key="role")
 
 
-def trail_problems(s: Session, cal: Calibration) -> list[str]:
-    """What a calibration's row says against its own audit trail (one line each): the
-    creator (``created_by_id``) not the one its creation event (``create`` or ``import``)
-    recorded, and a signed seal (``reviewed_seal``, ``approved_seal``) not the one its latest
-    ``review`` or ``approve`` event recorded. The duties and the issue trust neither column
-    alone: a row rewritten in the database (a creator changed so that they may approve, a
-    seal recomputed over a forged result) is refused on every path and listed by ``gonio db
-    verify`` (the trail is appended to and never rewritten by gonio). A calibration whose
-    trail has no such event (written before the records kept it) has nothing to compare."""
-    def event(actions: tuple[str, ...], first: bool) -> dict | None:
-        order = AuditEvent.id if first else AuditEvent.id.desc()
-        ev = s.scalar(select(AuditEvent).where(
-            AuditEvent.entity == "calibration", AuditEvent.entity_id == str(int(cal.id)),
-            AuditEvent.action.in_(actions)).order_by(order).limit(1))
-        if ev is None:
-            return None
-        try:
-            after = json.loads(ev.after_json or "{}")
-        except ValueError:
-            after = {}
-        return {"user_id": ev.user_id, **(after if isinstance(after, dict) else {})}
+def _latest_event(s: Session, entity: str, entity_id, actions: tuple[str, ...],
+                  first: bool = False) -> dict | None:
+    """The latest (``first``: the earliest) audit event ``actions`` on a record, as
+    ``{"user_id", "event_id", **after}`` (its recorded state after), None where the trail has
+    none."""
+    order = AuditEvent.id if first else AuditEvent.id.desc()
+    ev = s.scalar(select(AuditEvent).where(
+        AuditEvent.entity == entity, AuditEvent.entity_id == str(entity_id),
+        AuditEvent.action.in_(actions)).order_by(order).limit(1))
+    if ev is None:
+        return None
+    try:
+        after = json.loads(ev.after_json or "{}")
+    except ValueError:
+        after = {}
+    return {**(after if isinstance(after, dict) else {}), "user_id": ev.user_id,
+            "event_id": ev.id}
 
+
+def trail_problems(s: Session, cal: Calibration) -> list[str]:
+    """What a calibration's row says against its own audit trail (one line each). Every state
+    implies its events, each naming the user the row names: a calibration has its creation
+    event (``create`` or ``import``, naming ``created_by_id``); a reviewed one
+    (``reviewed_by_id`` set) its ``review`` by that reviewer, with the ``reviewed_seal`` the
+    row holds; an approved one (``approved_by_id`` set) its ``approve`` by that approver,
+    with the ``approved_seal``; each issued certificate its ``issue`` event recording that
+    number and approver (:func:`issue_problems`); an amendment waiting for its issue the
+    standards its approval fixed (:func:`amendment_problems`). The duties and the issue
+    trust neither the columns nor a trail with events missing: a row rewritten in the
+    database (a creator changed so that they may approve, a seal recomputed over a forged
+    result) or a trail with events deleted (its append-only trigger dropped) is refused on
+    every path and listed by ``gonio db verify`` (the trail is appended to and never
+    rewritten by gonio, and every state it records is entered with its event)."""
     out = []
-    made = event(("create", "import"), first=True)
-    if made is not None:
+    made = _latest_event(s, "calibration", cal.id, ("create", "import"), first=True)
+    if made is None:
+        out.append("its audit trail has no creation event (create or import): events were "
+                   "removed outside gonio")
+    else:
         creator = made.get("created_by_id", made["user_id"])
         if creator is not None and creator != cal.created_by_id:
             out.append("its recorded creator is not the one its audit trail's creation event "
                        "names: the row was changed outside gonio")
-    for action, column in (("review", "reviewed_seal"), ("approve", "approved_seal")):
-        signed = getattr(cal, column) or ""
-        ev = event((action,), first=False)
-        if signed and ev is not None and ev.get(column) not in (None, signed):
+    for action, noun, person, column in (
+            ("review", "reviewer", "reviewed_by_id", "reviewed_seal"),
+            ("approve", "approver", "approved_by_id", "approved_seal")):
+        who, signed = getattr(cal, person), getattr(cal, column) or ""
+        if who is None and not signed:
+            continue
+        ev = _latest_event(s, "calibration", cal.id, (action,))
+        if ev is None:
+            out.append(f"its audit trail has no {action} event, and the row names its "
+                       f"{noun}: events were removed outside gonio")
+            continue
+        if who is not None and ev["user_id"] != who:
+            out.append(f"its {noun} is not the user its audit trail's {action} event "
+                       "names: the row was changed outside gonio")
+        if signed and ev.get(column) not in (None, signed):
             out.append(f"its {column.replace('_', ' ')} is not the one its audit trail's "
                        f"{action} event recorded: the row was changed outside gonio")
+    return out + issue_problems(s, cal) + amendment_problems(s, cal)
+
+
+def issue_problems(s: Session, cal: Calibration) -> list[str]:
+    """Each certificate of ``cal`` against its ``issue`` audit event (one line each): the
+    event is there and records the certificate's number and approver. A certificate is
+    entered only with its issue event (:func:`store_issue`), so one without it had its
+    trail removed outside gonio."""
+    out = []
+    for cert in s.scalars(select(Certificate).where(Certificate.calibration_id == cal.id)
+                          .order_by(Certificate.id)):
+        ev = _latest_event(s, "certificate", cert.id, ("issue",))
+        if ev is None:
+            out.append(f"certificate {cert.number}: its audit trail has no issue event: "
+                       "events were removed outside gonio")
+            continue
+        kept = ev.get("certificate") if isinstance(ev.get("certificate"), dict) else {}
+        if (kept.get("number"), kept.get("issued_by_id")) != (cert.number, cert.issued_by_id):
+            out.append(f"certificate {cert.number}: its number or approver is not the one its "
+                       "audit trail's issue event recorded: the row was changed outside gonio")
+    return out
+
+
+def approved_statement(s: Session, cal: Calibration) -> list | None:
+    """The standards an amendment's approval fixed (its ``approve`` audit event's
+    ``stated_standards``, :func:`approve`): what its certificate states. None where the
+    latest approval is not one of the latest amendment asked for, or it fixed none
+    (approved before approvals kept it: the statement is then made at the issue,
+    :func:`amended_standards`)."""
+    asked = _event_id(s, "amend", "calibration", cal.id)
+    ev = _latest_event(s, "calibration", cal.id, ("approve",))
+    if asked is None or ev is None or ev["event_id"] < asked:
+        return None
+    got = ev.get("stated_standards")
+    return got if isinstance(got, list) else None
+
+
+def amendment_problems(s: Session, cal: Calibration) -> list[str]:
+    """An amendment approved and waiting for its issue (a reserved number, a certificate it
+    replaces) against what its approval fixed (:func:`approved_statement`), one line: the
+    standards attached now are the ones it states. Attaching is refused once approved, so
+    another set was written around the records; the issue refuses it rather than print
+    what nobody approved. The register entries' own fields: :func:`standard_problems`."""
+    if not (cal.pending_number and cal.pending_replaces_id):
+        return []
+    kept = approved_statement(s, cal)
+    if kept is None:
+        return []
+    fixed = sorted(str(e.get("identifier")) for e in kept if isinstance(e, dict))
+    now = sorted(standard_names(s, cal.id))
+    if fixed == now:
+        return []
+    return [f"standards: {fixed} when its amendment was approved, now {now}: changed outside "
+            "gonio"]
+
+
+def standard_problems(s: Session, ids: Iterable[int] | None = None) -> list[str]:
+    """Each standard's register entry (those ``ids``; None: every one) against its audit
+    trail, one line each: the entry has its creation event, and the fields a certificate
+    states and its dates (:data:`STANDARD_STATED`, :data:`STANDARD_RECALIBRATED`) are the
+    ones its latest ``create`` or ``update`` event recorded. Every edit through the
+    records is entered with its event (:func:`_update`), so a difference is an entry
+    changed in the database, which no certificate may state."""
+    q = select(Standard).order_by(Standard.id)
+    if ids is not None:
+        q = q.where(Standard.id.in_([int(i) for i in ids]))
+    out = []
+    for st in s.scalars(q):
+        ev = _latest_event(s, "standard", st.id, ("create", "update"))
+        if ev is None:
+            out.append(f"standard {st.identifier}: its audit trail has no creation event: "
+                       "events were removed outside gonio")
+            continue
+        row = state(st)
+        for k in STANDARD_STATED + STANDARD_RECALIBRATED:
+            if k in ev and ev[k] != row.get(k):
+                out.append(f"standard {st.identifier}: its {k} {row.get(k)!r} is not the "
+                           f"{ev[k]!r} its audit trail's latest event recorded: the row was "
+                           "changed outside gonio")
     return out
 
 
 def check_trail(s: Session, cal: Calibration, action: str) -> None:
     """Refuse ``action`` on a calibration whose row contradicts its audit trail
-    (:func:`trail_problems`), naming it and what no longer matches."""
-    found = trail_problems(s, cal)
+    (:func:`trail_problems`) or names a standard whose register entry contradicts its own
+    (:func:`standard_problems`: the certificate would state it), naming it and what no
+    longer matches."""
+    found = trail_problems(s, cal) + standard_problems(s, s.scalars(
+        select(CalibrationStandard.standard_id).where(
+            CalibrationStandard.calibration_id == cal.id)).all())
     if found:
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         raise GonioError(f"calibration {cal.id}: {found[0]}{more}: nothing to {action} "
@@ -2467,17 +2575,19 @@ def amendment_changers(s: Session, cal_id: int) -> set[int]:
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
                 number: bool = False, check=None, sealed_files: dict | None = None,
-                **changes) -> Calibration:
+                recorded=None, **changes) -> Calibration:
     """Check the state (and the second person; ``check(s, cal)``: the caller's own check
     after those), apply ``changes``, audit — one transaction; with ``number`` a certificate
     number is reserved in it (none is used up by a refusal). ``sealed_files`` (the stored
     files' digests the signed seal covers, :func:`sealed_content`) go into the audit event
     beside the row's state, so that a later mismatch names the file
-    (:func:`seal_differences`)."""
+    (:func:`seal_differences`); ``recorded(s, cal)`` (after the checks, before the changes)
+    gives what else the event records (an amendment's approval: the statement it fixes)."""
     with store.writing() as s:
         cal = _check(s, actor, cal_id, action, allowed)
         if check is not None:
             check(s, cal)
+        fixed = recorded(s, cal) if recorded is not None else {}
         before = state(cal)
         if number and not cal.pending_number:
             changes["pending_number"] = _reserve_number(s, utcnow().year)
@@ -2486,6 +2596,7 @@ def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str
         after = state(cal)
         if sealed_files is not None:
             after["sealed_files"] = dict(sealed_files)
+        after.update(fixed)
         audit(s, actor, action, "calibration", cal.id, before, after)
         s.commit()
     return cal
@@ -2697,7 +2808,10 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
     and with ``min_people`` 2 its creator may: :func:`check_duties`) and start issuing:
     the certificate number is reserved and the worker renders the final certificate. The
     approver signs the same :func:`seal` the reviewer signed (an amendment: the one its
-    calibration was approved with); a result changed since is refused."""
+    calibration was approved with); a result changed since is refused. An amendment's
+    approval fixes the statement of its standards (:func:`amendment_standards`, kept in
+    the ``approve`` audit event as ``stated_standards``): its certificate states them so
+    (:func:`approved_statement`), whatever the register says after."""
     require(actor, "reviewer")
     cal = calibration(store, cal_id)
     if cal.status not in ("reviewed", "amending"):
@@ -2720,8 +2834,12 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
             raise GonioError(f"the records state the calibration differently from the draft "
                              f"that was reviewed ({changed[0]}{more}): nothing approved "
                              "(gonio db verify lists it)", key=f"calibration {cal_id}")
+    def fixed(s, cal):              # an amendment states its standards as approved now
+        if cal.status != "amending":
+            return {}
+        return {"stated_standards": amendment_standards(store, s, cal, approved=False)}
     return _transition(store, actor, cal_id, "approve", ("reviewed", "amending"),
-                       number=True, check=as_reviewed, status="issuing",
+                       number=True, check=as_reviewed, recorded=fixed, status="issuing",
                        sealed_files=content["files"], approved_by_id=actor.id,
                        approved_at=utcnow(), approved_seal=signed,
                        progress="waiting for a worker", error="")
@@ -2963,8 +3081,10 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
             if final and not cal.pending_replaces_id:   # a first issue: the details reviewed
                 lab.update(_with_reviewed(lab, basis))
-            elif final:
-                lab["standards"] = amended_standards(s, cal, stds, lab["standards"], basis)
+            elif final:                # an amendment: as its approval fixed them
+                kept = approved_statement(s, cal)
+                lab["standards"] = kept if kept is not None else amended_standards(
+                    s, cal, stds, lab["standards"], basis)
         elif cal.lab_sha256 and (own := lab_file(store, cal.lab_sha256, cal.lab_name,
                                                  cal.spec_key)).get("specification_limits"):
             # the calibration's own laboratory file (one naming only its table calibration
@@ -3063,7 +3183,7 @@ def _replaced_statement(s: Session, cal: Calibration, drafted: dict) -> tuple[li
 
 
 def amended_standards(s: Session, cal: Calibration, stds: list, live: list,
-                      drafted: dict) -> list:
+                      drafted: dict, approved: bool = True) -> list:
     """The standards an amendment of ``cal`` states (``stds`` the standards it names, ``live``
     their register entries now, in that order; ``drafted`` its reviewed draft's details).
 
@@ -3074,9 +3194,10 @@ def amended_standards(s: Session, cal: Calibration, stds: list, live: list,
     certificate number corrected, before the amendment is asked for or during it). An edit
     after the approval reaches nothing (what is issued is what was approved). A standard the
     replaced certificate did not state (attached during the amendment) is stated as the
-    register holds it. The replaced certificate's statement: :func:`_replaced_statement`."""
+    register holds it. The replaced certificate's statement: :func:`_replaced_statement`.
+    ``approved`` False: the corrections up to now (the approval being made)."""
     base, since = _replaced_statement(s, cal, drafted)
-    until = _event_id(s, "approve", "calibration", cal.id)
+    until = _event_id(s, "approve", "calibration", cal.id) if approved else None
     by_ident = {str(e.get("identifier")): dict(e) for e in base if isinstance(e, dict)}
     fixes: dict[str, dict] = {}
     for _eid, _uid, sid, fields in standard_corrections(s, [st.id for st in stds], since,
@@ -3087,6 +3208,22 @@ def amended_standards(s: Session, cal: Calibration, stds: list, live: list,
         stated = by_ident.get(st.identifier)
         out.append(entry if stated is None else dict(stated, **fixes.get(str(st.id), {})))
     return out
+
+
+def amendment_standards(store, s: Session, cal: Calibration, approved: bool = True) -> list:
+    """The standards an amendment of ``cal`` states (:func:`amended_standards`), from the
+    standards attached to it, their register entries and its reviewed draft's details (its
+    stored lab.toml); ``approved`` False: with the corrections up to now."""
+    import tomllib
+
+    stds = [cs.standard for cs in s.scalars(select(CalibrationStandard).where(
+        CalibrationStandard.calibration_id == cal.id))]
+    live = [{"name": st.name, "identifier": st.identifier, "accuracy": st.accuracy,
+             "certificate": st.certificate, "traceability": st.traceability} for st in stds]
+    drafted = s.get(CalibrationFile, (cal.id, "lab.toml"))
+    basis = (tomllib.loads(file_bytes(store, drafted.sha256).decode("utf-8"))
+             if drafted is not None else {})
+    return amended_standards(s, cal, stds, live, basis, approved=approved)
 
 
 def stated_standards(s: Session, cert_id: int) -> list | None:

@@ -451,3 +451,65 @@ def test_a_renamed_operator_still_does_not_review(store, people, computed_folder
     services.review(store, people["rev"], cal.id, accept=True)
     with store.session() as s:
         assert services.names_held(s, measured) == {"vb", "someone else", "virtual bench"}
+
+
+def attached_and_approved(store, people, computed_folder, bench_readings, monkeypatch):
+    """An issued calibration's amendment asked for, a level LV-3 (certificate LV-CERT-9,
+    accuracy '0.1 arcsec') attached during it and the amendment approved (waiting for its
+    issue): (the calibration, LV-3)."""
+    import datetime as dt
+
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    services.amend(store, people["rev2"], first.id, "a level used was not named")
+    lvl = services.add_standard(store, people["tech"], name="level", identifier="LV-3",
+                                certificate="LV-CERT-9", accuracy="0.1 arcsec",
+                                due_on=dt.date.today() + dt.timedelta(days=300))
+    services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id, lvl.id])
+    assert services.approve(store, people["rev"], cal.id).status == "issuing"
+    return cal, lvl
+
+
+def test_a_standard_attached_during_an_amendment_is_stated_as_approved(
+        store, people, computed_folder, bench_readings, monkeypatch, tmp_path):
+    """The standard attached during an amendment is stated as the register held it when the
+    amendment was approved: an edit through the register between the approval and the
+    issue reaches nothing (before: the issued amendment printed a certificate number and
+    accuracy nobody approved). While it waits for its issue the records verify and a
+    backup is written (before: verify named the attached standard as a change from the
+    draft and the backup refused)."""
+    cal, lvl = attached_and_approved(store, people, computed_folder, bench_readings,
+                                     monkeypatch)
+    services.update_standard(store, people["tech"], lvl.id, certificate="FORGED-999",
+                             accuracy="0.00001 arcsec")
+    assert backup.verify(store)[1] == []
+    assert backup.backup(store, tmp_path / "waiting.zip")["calibrations"] == 1
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "LV-CERT-9" in page and "0.1 arcsec" in page
+    assert "FORGED-999" not in page and "0.00001 arcsec" not in page
+    assert backup.verify(store)[1] == []
+
+
+def test_a_standard_edited_in_the_database_after_an_amendments_approval_is_not_issued(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """The register entry of a standard an approved amendment states, changed in the
+    database (no audit event): verify names it and the issue refuses, nothing issued
+    (before: the forged certificate number was printed and verify found nothing)."""
+    from .test_records_issue import no_pipeline
+    from .test_records_sealed import certificates
+
+    cal, lvl = attached_and_approved(store, people, computed_folder, bench_readings,
+                                     monkeypatch)
+    issued = len(certificates(store))
+    with store.writing() as s:
+        s.execute(text("UPDATE standards SET certificate = 'FORGED-999' WHERE id = :i"),
+                  {"i": lvl.id})
+        s.commit()
+    assert ("standard LV-3: its certificate 'FORGED-999' is not the 'LV-CERT-9' its audit "
+            "trail's latest event recorded: the row was changed outside gonio"
+            in backup.verify(store)[1])
+    monkeypatch.setattr(worker, "calibrate_folder", no_pipeline)
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    now = services.calibration(store, cal.id)
+    assert now.status == "failed" and "standard LV-3: its certificate" in now.error
+    assert "\n" not in now.error and len(certificates(store)) == issued

@@ -136,3 +136,70 @@ def test_a_file_swapped_after_approval_stays_listed_once_the_issue_failed(
     _, problems = backup.verify(store)
     assert any(f"calibration {cal.id}: its stored result no longer matches the seal of its "
                "approval — summary.txt is not the file signed" in p for p in problems), problems
+
+
+def _delete_events(store, where: str, **params) -> None:
+    """Delete audit events as someone with the database would: the append-only trigger
+    dropped, the events deleted and the trigger made again, as it was."""
+    with store.writing() as s:
+        if s.get_bind().dialect.name == "postgresql":
+            s.execute(text("ALTER TABLE audit_events DISABLE TRIGGER audit_events_no_delete"))
+            s.execute(text(f"DELETE FROM audit_events WHERE {where}"), params)
+            s.execute(text("ALTER TABLE audit_events ENABLE TRIGGER audit_events_no_delete"))
+        else:
+            sql = s.scalar(text("SELECT sql FROM sqlite_master WHERE name = "
+                                "'audit_events_no_delete'"))
+            s.execute(text("DROP TRIGGER audit_events_no_delete"))
+            s.execute(text(f"DELETE FROM audit_events WHERE {where}"), params)
+            s.execute(text(sql))
+        s.commit()
+
+
+def test_a_deleted_creation_event_is_a_problem_not_nothing_to_compare(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    """The creation event deleted and the creator column rewritten: the creator (given the
+    reviewer role) does not approve their own calibration and verify names the missing
+    event (before: a missing event was "nothing to compare", the approval went through and
+    verify exited 0)."""
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.update_user(store, None, "tech", roles="technician reviewer")
+    _delete_events(store, "entity = 'calibration' AND action IN ('create', 'import') AND "
+                          "entity_id = :c", c=str(cal.id))
+    _sql(store, "UPDATE calibrations SET created_by_id = :u WHERE id = :c",
+         u=people["rev2"].id, c=cal.id)
+    with pytest.raises(GonioError, match=f"calibration {cal.id}: its audit trail has no "
+                                         r"creation event \(create or import\)"):
+        services.approve(store, services.user(store, "tech"), cal.id)
+    assert services.calibration(store, cal.id).status == "reviewed"
+    assert (f"calibration {cal.id}: its audit trail has no creation event (create or "
+            "import): events were removed outside gonio") in backup.verify(store)[1]
+
+
+def test_an_issued_certificate_whose_trail_is_wiped_does_not_verify(
+        store, people, computed_folder, bench_readings, monkeypatch, tmp_path):
+    """Every audit event of an issued calibration and its certificate deleted: verify names
+    each missing event, and no backup of it is written (before: verify found nothing)."""
+    from .test_records_issue import approved, run_issue
+
+    cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
+    cert = run_issue(store, monkeypatch)
+    assert backup.verify(store)[1] == []
+    _delete_events(store, "entity IN ('calibration', 'certificate')")
+    problems = backup.verify(store)[1]
+    for missing in ("no creation event", "no review event", "no approve event",
+                    f"certificate {cert.number}: its audit trail has no issue event"):
+        assert any(p.startswith(f"calibration {cal.id}: ") and missing in p
+                   for p in problems), (missing, problems)
+    with pytest.raises(GonioError, match="the records do not verify"):
+        backup.backup(store, tmp_path / "wiped.zip")
+
+
+def test_a_missing_trigger_is_a_problem(sqlite_store, tmp_path):
+    """The audit trail's append-only trigger dropped: verify names it (before: nothing was
+    said, and the trail could be deleted without an error)."""
+    assert backup.verify(sqlite_store)[1] == []
+    _sql(sqlite_store, "DROP TRIGGER audit_events_no_delete")
+    assert backup.verify(sqlite_store)[1] == [
+        "table audit_events: its trigger audit_events_no_delete is missing (its rows can be "
+        "deleted without an error)"]

@@ -70,6 +70,12 @@ def creator_reviews(t):
     cal["rows"][0][col(cal, "reviewed_by_id")] = cal["rows"][0][col(cal, "created_by_id")]
 
 
+def events_removed(t):
+    ae = t["audit_events"]
+    ae["rows"] = [r for r in ae["rows"]
+                  if r[col(ae, "entity")] not in ("calibration", "certificate")]
+
+
 @pytest.mark.parametrize("change,said", [
     (scaled_value, "differs from the stored results.json"),
     (no_certificates, "issued, and no certificate of it is recorded"),
@@ -77,7 +83,10 @@ def creator_reviews(t):
     # the creator column rewritten: first against its own audit trail (the trail names the
     # calibration's real creator), then the approver check behind it
     (creator_approves, "its recorded creator is not the one its audit trail"),
-    (creator_reviews, "reviewed by the person who created it")])
+    # the reviewer column rewritten: against the review event, which names the real reviewer
+    (creator_reviews, "its reviewer is not the user its audit trail's review event names"),
+    # the calibration's and certificate's events left out of the archive
+    (events_removed, r"its audit trail has no creation event \(create or import\)")])
 def test_a_tampered_archive_is_not_restored(issued_archive, tmp_path, change, said):
     _, good = issued_archive
     bad = tmp_path / "bad.zip"
