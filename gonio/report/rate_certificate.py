@@ -282,13 +282,16 @@ def screening_blocks(res: dict, L: dict, phrases=(), extra: dict | None = None,
     count, then one line each with its place in the file, in the certificate's language
     (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table), those
     about the whole file (the identity, unread columns) first;
-    nothing when the screening found nothing."""
+    nothing when the screening found nothing. The count of readings set aside is the rows
+    results.json's ``unused_readings`` lists (a finding may set a whole step aside), else
+    one per ``set_aside`` finding."""
     found = stated_findings(res.get("findings"))            # whole-file first
     if not found:
         return []
-    aside = sum(f["action"] == "set_aside" for f in found)
+    n_aside = sum(f["action"] == "set_aside" for f in found)
+    rows = len(res.get("unused_readings") or []) or n_aside
     blocks = [Block("h", L["screening_h"]),
-              Block("p", [L["screening_note"].format(n=aside, m=len(found) - aside)])]
+              Block("p", [L["screening_note"].format(n=rows, m=len(found) - n_aside)])]
     blocks += [Block("p", ["• " + finding_text(f, L, phrases, extra)]) for f in found[:limit]]
     if len(found) > limit:
         blocks.append(Block("p", [L["more_findings"].format(n=len(found) - limit)]))

@@ -1,8 +1,9 @@
 """Screening of rate-gyro readings (JJF 1535, IEC 62047-20): every reading is
 checked against what the rest of its segment predicts, in every column, and the programme
 against the protocol. Each specification's ``screen(readings, protocol)`` calls these rules
-with its own programme; the calibration sets the flagged rows aside and states every
-finding in ``results.json`` (``findings``) and on the certificate.
+with its own programme; the calibration sets the flagged rows aside, states every
+finding in ``results.json`` (``findings``) and on the certificate, and lists every row set
+aside in ``results.json``'s ``unused_readings`` (:func:`unused_readings`).
 
 Rules (one segment = the rows of one test, run and step, in time order):
 
@@ -835,16 +836,63 @@ def missing_points(df: pd.DataFrame, expected: dict, *, file=None,
     return out
 
 
+def set_aside_lines(df: pd.DataFrame, findings: list[Finding]) -> dict[int, Finding]:
+    """Every line of ``df`` a ``set_aside`` finding takes out, with the first finding that
+    does (in the findings' order): the finding's own line, and for an ``off-programme``
+    finding every line of its segment (the rows of its line's test, run and step) — the one
+    account :func:`apply` removes and :func:`unused_readings` lists, so the two cannot differ.
+    A line the readings do not hold is kept with its finding (the list names it all the same)."""
+    out: dict[int, Finding] = {}
+    mine = [f for f in findings if f.action == "set_aside" and f.line is not None]
+    if not mine or "line" not in df:
+        return out
+    lines = df["line"].to_numpy()
+    key = df.groupby(["test", "run", "step"], sort=False).ngroup().to_numpy() \
+        if any(f.code == OFF_PROGRAMME for f in mine) else None
+    for f in mine:
+        taken = [int(f.line)]
+        if f.code == OFF_PROGRAMME and key is not None:   # every row of its segment
+            at = np.flatnonzero(lines == f.line)
+            if at.size:
+                taken = [int(v) for v in lines[key == key[at[0]]]]
+        for line in taken:
+            out.setdefault(line, f)
+    return out
+
+
 def apply(df: pd.DataFrame, findings: list[Finding]) -> pd.DataFrame:
-    """The readings without the rows set aside (by line; the input is not modified)."""
-    lines = {f.line for f in findings if f.action == "set_aside" and f.line is not None}
-    if not lines or "line" not in df:
+    """The readings without the rows set aside (by line, :func:`set_aside_lines`; the input
+    is not modified)."""
+    lines = set_aside_lines(df, findings)
+    if not lines:
         return df
-    whole = {f.line for f in findings if f.code == OFF_PROGRAMME and f.line is not None}
-    if whole:                      # the segment of each such line, every row of it
-        key = df.groupby(["test", "run", "step"], sort=False).ngroup()
-        lines |= set(df["line"][key.isin(set(key[df["line"].isin(whole)]))])
     return df[~df["line"].isin(lines)].reset_index(drop=True)
+
+
+def unused_readings(readings, findings: list[Finding]) -> list[dict]:
+    """results.json's ``unused_readings``: one row per line of the readings (as read, before
+    the screening) a ``set_aside`` finding takes out (:func:`set_aside_lines`: every row of an
+    off-programme step, each listed), in the file's order — ``file``, ``line``, the row's
+    ``test``, ``run`` and ``step``, the ``column`` the rule judged (an off-programme step's
+    rows: ``rate_dps``) and the finding's message as ``reason``, the shape of the triad's rows
+    (docs/formats.md "Results file"). A row set aside is a finding and a reading no item
+    used: results.json names it in both, so a reader sees which rows were left out without
+    reading the findings."""
+    df = readings.data
+    file = None if readings.path is None else str(readings.path)
+    rows = {}
+    if "line" in df:
+        for rec in df[["line", "test", "run", "step"]].itertuples(index=False):
+            rows[int(rec.line)] = rec
+    out = []
+    for line, f in sorted(set_aside_lines(df, findings).items()):
+        rec = rows.get(line)
+        out.append({"file": f.file if f.file is not None else file, "line": line,
+                    "test": f.test if rec is None else str(rec.test),
+                    "run": None if rec is None else int(rec.run),
+                    "step": None if rec is None else int(rec.step),
+                    "column": f.column, "reason": f.message})
+    return out
 
 
 def summary(findings: list[Finding]) -> str:

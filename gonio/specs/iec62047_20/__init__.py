@@ -83,7 +83,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     from gonio.specs._rate_family.rate_records import (calibrate_items, load_readings,
                                                        metadata_number, protocol_named,
                                                        stated_rate_table_u)
-    from gonio.specs._rate_family.screening import screened, screening_extra
+    from gonio.specs._rate_family.screening import (screened, screening_extra,
+                                                     unused_readings)
     from gonio.specs.iec62047_20 import items as _items
     from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, t_base
     from gonio.specs.iec62047_20.screen import screen
@@ -96,6 +97,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     proto = protocol if isinstance(protocol, IECProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
     # the pipeline screens first (SPEC.screen) and hands the findings here
+    given = rd
     rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     md, P = rd.metadata, proto.sections
     ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
@@ -130,6 +132,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                       "ratiometric": ratiometric, "rows_corrected": n_corr},
                       **screening_extra(findings)},
                   findings=findings,
+                  unused_readings=unused_readings(given, findings),
                   settings=protocol_provenance(proto.path))
 
 

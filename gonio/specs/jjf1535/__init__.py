@@ -90,7 +90,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     from gonio.result.model import Result, source_info
     from gonio.specs._rate_family.rate_records import (calibrate_items, load_readings,
                                                        protocol_named)
-    from gonio.specs._rate_family.screening import screened, screening_extra
+    from gonio.specs._rate_family.screening import (screened, screening_extra,
+                                                     unused_readings)
     from gonio.specs.jjf1535 import items as _items_mod
     from gonio.specs.jjf1535.budget import annex_a
     from gonio.specs.jjf1535.protocol import JJFProtocol, load_protocol
@@ -104,6 +105,7 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     proto = protocol if isinstance(protocol, JJFProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
     # the pipeline screens first (SPEC.screen) and hands the findings here
+    given = rd
     rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     ctx = make_context(rd, proto)
     items = calibrate_items(ctx, _items_mod, monte_carlo_trials)
@@ -112,6 +114,7 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
                   extra={"annex_a": annex_a().to_dict(),
                          **screening_extra(findings)},
                   findings=findings,
+                  unused_readings=unused_readings(given, findings),
                   settings=protocol_provenance(proto.path))
 
 
