@@ -180,6 +180,10 @@ def test_n_samples_contradicting_duration_and_rate_is_refused(sim, tmp_path, cap
     assert "contradicts duration_s" in err and "sample_rate_hz" in err
     (d / "readings.csv").write_text(_edit(text, i, "n_samples", str(n + 1)), encoding="utf-8")
     assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "one")]) == 0
+    # a logger that dropped 0.8 % of the samples states the count it averaged: accepted
+    (d / "readings.csv").write_text(_edit(text, i, "n_samples", str(round(n * 0.992))),
+                                    encoding="utf-8")
+    assert main(["calibrate", str(d / "readings.csv"), "--out", str(tmp_path / "dropped")]) == 0
 
 
 def test_empty_sd_cell_of_a_dwell_is_refused(sim, tmp_path, capsys):

@@ -261,26 +261,29 @@ def _parse_triad_readings(text: str, file: str) -> TriadReadings:
     return TriadReadings(df, meta, file)
 
 
-#: Largest difference, in samples, between a row's ``n_samples`` and ``duration_s`` ×
-#: ``sample_rate_hz`` (a record starts and ends on a sample: one sample either way).
-SAMPLE_COUNT_TOL = 1.0
+#: Largest difference between a row's ``n_samples`` and ``duration_s`` × ``sample_rate_hz``:
+#: one sample (a record starts and ends on a sample) or this share of the count, whichever
+#: is larger (a logger that drops a few samples states the count it averaged).
+SAMPLE_COUNT_TOL, SAMPLE_COUNT_TOL_REL = 1.0, 0.01
 
 
 def check_sample_counts(df: pd.DataFrame, rate_hz: float, file) -> None:
     """Refuse a row whose ``n_samples`` contradicts ``duration_s`` × ``sample_rate_hz`` by
-    more than :data:`SAMPLE_COUNT_TOL` samples. The duration and the file's sample rate are
-    the record's settings; ``n_samples`` is the count they give, and it weighs the dwell in
-    the alignment fit and divides its sd: a count that disagrees with them is a typo in one
-    of the two columns, which cannot be told, so the row is refused (naming ``n_samples``)
-    rather than fitted with a wrong weight."""
+    more than :data:`SAMPLE_COUNT_TOL` samples and :data:`SAMPLE_COUNT_TOL_REL` of the
+    count. The duration and the file's sample rate are the record's settings; ``n_samples``
+    is the count they give, less any samples the logger dropped, and it weighs the dwell in
+    the alignment fit and divides its sd: a count further from them than a few dropped
+    samples is a typo in one of the two columns, which cannot be told, so the row is
+    refused (naming ``n_samples``) rather than fitted with a wrong weight."""
     n = df["n_samples"].to_numpy(float)
     want = df["duration_s"].to_numpy(float) * rate_hz
-    bad = np.flatnonzero(np.abs(n - want) > SAMPLE_COUNT_TOL)
+    tol = np.maximum(SAMPLE_COUNT_TOL, SAMPLE_COUNT_TOL_REL * np.abs(want))
+    bad = np.flatnonzero(np.abs(n - want) > tol)
     if bad.size:
         k = int(bad[0])
         raise GonioError(f"n_samples {int(n[k])} contradicts duration_s "
                          f"{df['duration_s'].iloc[k]:.6g} s × sample_rate_hz {rate_hz:.6g} Hz = "
-                         f"{want[k]:.6g} samples (more than {SAMPLE_COUNT_TOL:g} apart): a typo in "
+                         f"{want[k]:.6g} samples (more than {tol[k]:.3g} apart): a typo in "
                          "one of them", file=file, line=int(df["line"].iloc[k]), column="n_samples")
 
 
