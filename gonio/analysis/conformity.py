@@ -53,7 +53,7 @@ from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal, localcontext
 
 from gonio.errors import GonioError
 from gonio.formats.lab import (DECISION_RULES, check_guard_factor, check_interval,
-                              check_nonnegative, check_one_limit_per_item,
+                              check_limit_unit, check_nonnegative, check_one_limit_per_item,
                               check_symmetric)
 from gonio.result.model import Conformity
 from gonio.result.statement import (K_SOURCE_BOUND_CHI2, decimals_for_sig, given_text,
@@ -841,7 +841,10 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
     specification's items; an item not measured, or without U, gets a Conformity with no
     outcome and the ``reason``. An extreme of magnitudes (:func:`extreme_of_magnitudes`:
     ``magnitude_extremes``, the keys its specification declares so, or the marker of its
-    statement) takes a symmetric limit only (:func:`check_symmetric_limit`). An item stated by its
+    statement) takes a symmetric limit only (:func:`check_symmetric_limit`). A limit that
+    states its ``unit`` is checked against the item's unit here, once the result states it
+    (:func:`gonio.formats.lab.check_limit_unit`: the same unit however spelt, else refused,
+    never converted). An item stated by its
     95 % interval alone is decided on that interval as stated (:func:`_decided_interval`); its
     acceptance bounds the interval's ends under a guard band, and a probability is given only
     where the interval is the χ² one of a standard deviation
@@ -866,6 +869,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
             raise GonioError(f"{result.spec_key} has no item {key!r} (its items: "
                              f"{', '.join(result.items)})", key=f"{where}[{i}].item")
         it = result.items[key]
+        check_limit_unit(key, lim, it.unit, key=f"{where}[{i}].unit")
         bounds = limits_of(lim)
         magnitude = extreme_of_magnitudes(key, it, magnitude_extremes)
         if magnitude:

@@ -24,10 +24,12 @@ decisions on its limits are taken by :mod:`gonio.analysis.conformity`.
 from __future__ import annotations
 
 import contextlib
+from fractions import Fraction
 import datetime as _dt
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.units import same_unit, unit_factor, unit_powers
 from gonio.formats.toml import (Field, check_text_fields, non_negative, positive, read_toml,
                                 validate_table)
 
@@ -120,6 +122,10 @@ LAB_SCHEMA: dict[str, Field] = {
         "item": Field("str"),       # checked against the specification's items when decided
         "lower": Field("float", default=None), "upper": Field("float", default=None),
         "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
+        # the limit's unit: must be the item's as results.json states it (check_limit_unit)
+        "unit": Field("str", default=None,
+                      check=lambda s: 0 < len(s.strip()) <= 40 and unit_powers(s) is not None,
+                      expect="a unit as results.json states the item's (\"°/h\", \"%\")"),
         "source": _S}),
     # ISO/IEC 17025 7.8.4.3: a certificate recommends a recalibration interval only where
     # one was agreed with the customer; without this table it states none
@@ -299,6 +305,54 @@ def check_nonnegative_limits(limits, nonnegative, *, file=None,
         item = lim.get("item")
         if isinstance(item, str) and any(fnmatchcase(item, k) for k in nonnegative):
             check_nonnegative(item, lim.get("upper"), file=file, key=f"{where}[{i}].upper")
+
+def _limit_text(x: float) -> str:
+    """A limit's number as a message writes it back: %g where that keeps it, else repr."""
+    text = f"{x:g}"
+    return text if float(text) == x else repr(x)
+
+
+def check_limit_unit(item: str, lim: dict, item_unit: str | None, *, file=None,
+                     key: str | None = None) -> None:
+    """A limit's stated ``unit`` (``lim["unit"]``) must be the item's unit as results.json
+    states it (``item_unit``), however spelt (:func:`gonio.units.same_unit`: "°/h", "deg/h"
+    and "º/h" are one unit). A limit is compared with the value as given, never converted, so
+    any other unit is a GonioError naming ``key`` (the entry's ``.unit``), the limit's unit
+    and the item's: one the item's converts to exactly (:func:`gonio.units.unit_factor`:
+    °/s and °/h, % and ppm, ″ and °) with the limit written in the item's unit, one that
+    does not ("mV/(°/s)" for "%") as not the item's. Without ``unit`` the limit is in the
+    item's unit (nothing to check).
+
+    >>> check_limit_unit("bias", {"unit": "deg/h", "mpe": 36}, "°/h")
+    >>> check_limit_unit("bias", {"unit": "°/s", "mpe": 0.01}, "deg/h", key="limits[0].unit")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key limits[0].unit: bias: limit in °/s for an item in deg/h (1 °/s = 3600 deg/h): write mpe = 36 with unit = "deg/h" (a limit is compared as given, never converted)
+    >>> check_limit_unit("K_n", {"unit": "ppm", "upper": 5}, "%")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: K_n: limit in ppm for an item in % (1 ppm = 0.0001 %): write upper = 0.0005 with unit = "%" (a limit is compared as given, never converted)
+    >>> check_limit_unit("K", {"unit": "mV/(°/s)", "mpe": 1}, "%")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: K: limit in mV/(°/s) for an item in %: not the item's unit as results.json states it, and not convertible to it; give the limit in %
+    """
+    unit = lim.get("unit")
+    if unit is None or same_unit(unit, item_unit):
+        return
+    shown = item_unit or "1"
+    factor = unit_factor(unit, item_unit)
+    if factor is None:
+        raise GonioError(f"{item}: limit in {unit} for an item in {shown}: not the item's unit "
+                         f"as results.json states it, and not convertible to it; give the "
+                         f"limit in {shown}", file=file, key=key)
+    ends = ", ".join(f"{k} = {_limit_text(float(Fraction(repr(float(lim[k]))) * factor))}"
+                     for k in ("mpe", "lower", "upper") if lim.get(k) is not None)
+    raise GonioError(f"{item}: limit in {unit} for an item in {shown} (1 {unit} = "
+                     f"{_limit_text(float(factor))} {shown}): write {ends} with unit = "
+                     f"\"{shown}\" (a limit is compared as given, never converted)",
+                     file=file, key=key)
+
 
 #: ``[record]`` keys only the records write, for the sealed result they issue and render again
 #: (:func:`gonio.records.compute.render_folder`): a seal, the people the issue required, an
