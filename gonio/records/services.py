@@ -498,8 +498,11 @@ def _create(store, actor: User | None, obj, entity: str, same, message: str, key
 
 
 def check_limits(limits, spec_key: str | None = None) -> list[dict]:
-    """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
-    checks them (``LAB_SCHEMA['specification_limits']``); with ``spec_key``, a limit that is
+    """Specification limits [{item, lower, upper, mpe, unit, source}] checked as the
+    certificate checks them (``LAB_SCHEMA['specification_limits']``: a ``unit`` is a unit's
+    text; whether it is the item's is decided once a calibration states the item's unit,
+    :func:`gonio.formats.lab.check_limit_unit` at the conformity decision, as for the
+    laboratory file's limits); with ``spec_key``, a limit that is
     not symmetric for an item that specification declares an extreme of magnitudes
     (``SPEC.magnitude_extremes``), or an upper limit below zero for an item it declares
     cannot be negative (``SPEC.nonnegative_items``), is refused when stored, as the

@@ -204,16 +204,21 @@ def _int(v, name: str) -> int:
 
 
 def _limits_from(data) -> list[dict]:
-    """Up to three limit rows of the form: item, lower, upper, mpe, source."""
+    """Up to three limit rows of the form: item, lower, upper, mpe, unit, source (a unit
+    left empty is not given: the limit is in the item's unit; one given is checked as the
+    laboratory file's, :func:`gonio.records.services.check_limits`)."""
     out = []
     for i in range(3):
         item = str(data.get(f"limit_item_{i}", "") or "").strip()
         if not item:
             if any(str(data.get(f"limit_{k}_{i}", "") or "").strip()
-                   for k in ("lower", "upper", "mpe", "source")):
+                   for k in ("lower", "upper", "mpe", "unit", "source")):
                 raise GonioError("a limit needs its item key", key=f"limit {i + 1}")
             continue
         row = {"item": item, "source": str(data.get(f"limit_source_{i}", "") or "")}
+        unit = str(data.get(f"limit_unit_{i}", "") or "").strip()
+        if unit:
+            row["unit"] = unit
         for k in ("lower", "upper", "mpe"):
             v = services.number_value(data.get(f"limit_{k}_{i}"), f"limit {k}", -1e12, 1e12)
             if v is not None:
