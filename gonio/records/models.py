@@ -262,7 +262,7 @@ class Instrument(Base):
     spec_key: Mapped[str] = mapped_column(String(64))
     #: the interval set by the laboratory (months); None: the specification's default
     interval_months: Mapped[int | None] = mapped_column(Integer, nullable=True)
-    #: specification limits: JSON list of {item, lower, upper, mpe, source}
+    #: specification limits: JSON list of {item, lower, upper, mpe, unit, source}
     limits_json: Mapped[str] = mapped_column(Text, default="[]")
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
     #: retired (no new calibration uses it; its history stays); None: in use
