@@ -303,7 +303,6 @@ def set_settings(store, actor: User | None, **values) -> dict:
                                  f"({waiting[0]}…), approved under min_people "
                                  f"{min_people(s)}: change it once they are issued",
                                  key="min_people")
-            check_fewer_people(s, int(values["min_people"]))
         for k, v in values.items():
             row = s.get(Setting, k)
             before = state(row)
@@ -2281,23 +2280,6 @@ def _complete(s: Session, cal: Calibration, action: str) -> None:
         raise GonioError(f"cannot {action} calibration {cal.id}: it names no "
                          + " and no ".join(missing) + "; attach them first (the calibration "
                          "page, or gonio db attach)", key="submission")
-
-
-def check_fewer_people(s: Session, wanted: int) -> None:
-    """Refuse lowering ``min_people`` (3 to 2) while a calibration is reviewed and waits for
-    its approval, or an amendment waits for its approval: they were reviewed or asked for
-    under the rule of three people, and lowered now their reviewer (or, for an amendment,
-    their creator) could approve them (:func:`check_duties`); the laboratory changes it
-    once they are approved. Raising it needs no wait (it only asks for more people)."""
-    if wanted >= min_people(s):
-        return
-    held = s.scalars(select(Calibration.id).where(
-        Calibration.status.in_(("reviewed", "amending"))).order_by(Calibration.id)).all()
-    if held:
-        raise GonioError(f"{len(held)} calibration(s) reviewed or being amended under "
-                         f"min_people {min_people(s)} wait for their approval (calibration "
-                         f"{held[0]}…): lowered now, fewer people could approve them; change "
-                         "it once they are approved", key="min_people")
 
 
 def min_people(s: Session) -> int:
