@@ -937,7 +937,8 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
     amendment waiting for its issue: what its approval fixed,
     :func:`gonio.records.services.amendment_problems`), each row against the audit events
     its state implies (:func:`gonio.records.services.trail_problems`,
-    :func:`gonio.records.services.standard_problems`), the protective triggers
+    :func:`gonio.records.services.register_problems`: customers, instruments, standards), the
+    protective triggers
     (:func:`trigger_problems`) and the rows' consistency (:func:`consistency_problems`);
     ``files`` False leaves out the
     stored files' digests (checked by the caller). Returns (counts, problems: one line
@@ -983,7 +984,8 @@ def verify(store, files: bool = True) -> tuple[dict, list[str]]:
         for cal in s.scalars(select(Calibration).order_by(Calibration.id)):
             problems += [f"calibration {cal.id}: {line}"
                          for line in services.trail_problems(s, cal)]
-        problems += services.standard_problems(s)
+        for entity in services.REGISTER_TRAIL:
+            problems += services.register_problems(s, entity)
     problems += trigger_problems(store) + consistency_problems(store)
     return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems
 

@@ -2439,7 +2439,7 @@ def amendment_problems(s: Session, cal: Calibration) -> list[str]:
     replaces) against what its approval fixed (:func:`approved_statement`), one line: the
     standards attached now are the ones it states. Attaching is refused once approved, so
     another set was written around the records; the issue refuses it rather than print
-    what nobody approved. The register entries' own fields: :func:`standard_problems`."""
+    what nobody approved. The register entries' own fields: :func:`register_problems`."""
     if not (cal.pending_number and cal.pending_replaces_id):
         return []
     kept = approved_statement(s, cal)
@@ -2453,40 +2453,55 @@ def amendment_problems(s: Session, cal: Calibration) -> list[str]:
             "gonio"]
 
 
-def standard_problems(s: Session, ids: Iterable[int] | None = None) -> list[str]:
-    """Each standard's register entry (those ``ids``; None: every one) against its audit
-    trail, one line each: the entry has its creation event, and the fields a certificate
-    states and its dates (:data:`STANDARD_STATED`, :data:`STANDARD_RECALIBRATED`) are the
-    ones its latest ``create`` or ``update`` event recorded. Every edit through the
-    records is entered with its event (:func:`_update`), so a difference is an entry
-    changed in the database, which no certificate may state."""
-    q = select(Standard).order_by(Standard.id)
+def register_problems(s: Session, entity: str, ids: Iterable[int] | None = None) -> list[str]:
+    """Each register entry of ``entity`` (``customer``, ``instrument`` or ``standard``; those
+    ``ids``, None: every one) against its audit trail, one line each: the entry has its
+    creation event, and the fields a certificate states of it and its dates
+    (:data:`REGISTER_TRAIL`) are the ones its latest ``create`` or ``update`` event
+    recorded. Every way gonio writes these rows — registering (:func:`add_customer`,
+    :func:`register_instrument`, :func:`add_standard`, the import's registration of a new
+    instrument and customer), editing, retiring and bringing back (:func:`_update`) — enters
+    the row's state with that event, so a difference is an entry changed in the database,
+    which no certificate may state (an amendment states its customer and instrument as the
+    register holds them at its issue). A field an event did not record (a column added
+    since) is not compared."""
+    model, label, fields = REGISTER_TRAIL[entity]
+    q = select(model).order_by(model.id)
     if ids is not None:
-        q = q.where(Standard.id.in_([int(i) for i in ids]))
+        q = q.where(model.id.in_([int(i) for i in ids]))
     out = []
-    for st in s.scalars(q):
-        ev = _latest_event(s, "standard", st.id, ("create", "update"))
+    for obj in s.scalars(q):
+        name = f"{entity} {getattr(obj, label)}"
+        ev = _latest_event(s, entity, obj.id, ("create", "update"))
         if ev is None:
-            out.append(f"standard {st.identifier}: its audit trail has no creation event: "
-                       "events were removed outside gonio")
+            out.append(f"{name}: its audit trail has no creation event: events were removed "
+                       "outside gonio")
             continue
-        row = state(st)
-        for k in STANDARD_STATED + STANDARD_RECALIBRATED:
+        row = state(obj)
+        for k in fields:
             if k in ev and ev[k] != row.get(k):
-                out.append(f"standard {st.identifier}: its {k} {row.get(k)!r} is not the "
-                           f"{ev[k]!r} its audit trail's latest event recorded: the row was "
-                           "changed outside gonio")
+                out.append(f"{name}: its {k} {row.get(k)!r} is not the {ev[k]!r} its audit "
+                           "trail's latest event recorded: the row was changed outside gonio")
     return out
+
+
+def stated_register_problems(s: Session, cal: Calibration) -> list[str]:
+    """:func:`register_problems` of the entries a certificate of ``cal`` states: its
+    instrument, that instrument's customer and the standards attached to it."""
+    inst = s.get(Instrument, cal.instrument_id)
+    return (register_problems(s, "customer", [inst.customer_id] if inst is not None else [])
+            + register_problems(s, "instrument", [cal.instrument_id])
+            + register_problems(s, "standard", s.scalars(
+                select(CalibrationStandard.standard_id).where(
+                    CalibrationStandard.calibration_id == cal.id)).all()))
 
 
 def check_trail(s: Session, cal: Calibration, action: str) -> None:
     """Refuse ``action`` on a calibration whose row contradicts its audit trail
-    (:func:`trail_problems`) or names a standard whose register entry contradicts its own
-    (:func:`standard_problems`: the certificate would state it), naming it and what no
-    longer matches."""
-    found = trail_problems(s, cal) + standard_problems(s, s.scalars(
-        select(CalibrationStandard.standard_id).where(
-            CalibrationStandard.calibration_id == cal.id)).all())
+    (:func:`trail_problems`) or names a customer, instrument or standard whose register
+    entry contradicts its own (:func:`stated_register_problems`: the certificate would
+    state it), naming it and what no longer matches."""
+    found = trail_problems(s, cal) + stated_register_problems(s, cal)
     if found:
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         raise GonioError(f"calibration {cal.id}: {found[0]}{more}: nothing to {action} "
@@ -3129,6 +3144,17 @@ def reviewed_part(lab: dict) -> dict:
 STANDARD_STATED = ("name", "identifier", "accuracy", "certificate", "traceability")
 #: The fields whose change in an edit records the standard's recalibration.
 STANDARD_RECALIBRATED = ("calibrated_on", "due_on")
+
+#: The register entries checked against their audit trail (:func:`register_problems`): each
+#: entity's model, the column naming an entry in a finding, and the fields compared — what a
+#: certificate states of it (:data:`STATED_FIELDS`, :data:`STANDARD_STATED`) and its dates
+#: (:data:`STANDARD_RECALIBRATED`, ``retired_on``).
+REGISTER_TRAIL = {
+    "customer": (Customer, "name", STATED_FIELDS["customer"] + ("retired_on",)),
+    "instrument": (Instrument, "serial", STATED_FIELDS["instrument"] + ("retired_on",)),
+    "standard": (Standard, "identifier",
+                 STANDARD_STATED + STANDARD_RECALIBRATED + ("retired_on",)),
+}
 
 
 def standard_corrections(s: Session, standard_ids, since: int, until: int | None = None

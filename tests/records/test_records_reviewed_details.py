@@ -99,14 +99,22 @@ def test_a_database_edit_is_refused_at_approval_and_never_issued(store, people,
     serial("FAKE-9999")
     assert services.details_changed(store, cal.id) == [
         "instrument serial: 'RLG-0001' in the draft, now 'FAKE-9999'"]
-    with pytest.raises(GonioError, match="differently from the draft that was reviewed "
-                                         r"\(instrument serial: 'RLG-0001'"):
+    # the register entry against its trail is checked first (check_duties), in one line
+    with pytest.raises(GonioError, match="instrument FAKE-9999: its serial 'FAKE-9999' is "
+                                         "not the 'RLG-0001' its audit trail's latest event"):
         services.approve(store, people["rev2"], cal.id)
     assert any("instrument serial" in p for p in backup.verify(store)[1])
     serial("RLG-0001")
     assert services.details_changed(store, cal.id) == [] and backup.verify(store)[1] == []
     services.approve(store, people["rev2"], cal.id)
-    serial("FAKE-9999")                         # after the approval: the issue states the draft's
+    serial("FAKE-9999")           # after the approval: the issue refuses the edited register
+    from .test_records_issue import no_pipeline
+    monkeypatch.setattr(worker, "calibrate_folder", no_pipeline)
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    assert "instrument FAKE-9999: its serial" in services.calibration(store, cal.id).error
+    serial("RLG-0001")                          # restored: issued, stating the draft's
+    services.retry(store, people["tech"], cal.id)
     page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
     assert "RLG-0001" in page and "FAKE-9999" not in page
 
