@@ -521,3 +521,63 @@ def test_a_standard_edited_in_the_database_after_an_amendments_approval_is_not_i
     now = services.calibration(store, cal.id)
     assert now.status == "failed" and "standard LV-3: its certificate" in now.error
     assert "\n" not in now.error and len(certificates(store)) == issued
+
+
+REGISTER_EDITS = {        # (table, column, value): a row edited in the database, no event
+    "instrument": ("instruments", "serial", "FAKE-9999"),
+    "customer": ("customers", "name", "Forged Customer Ltd"),
+}
+
+
+@pytest.mark.parametrize("what", sorted(REGISTER_EDITS))
+def test_an_instrument_or_customer_edited_in_the_database_after_an_amendments_approval(
+        what, store, people, computed_folder, bench_readings, monkeypatch):
+    """The instrument's serial or the customer's name an approved amendment states, changed
+    in the database after its approval (no audit event): verify names it, and the issue
+    refuses in one line, nothing issued (before: an amendment keeps no copy of them, so the
+    edit was printed on the issued certificate and verify found nothing)."""
+    from .test_records_issue import no_pipeline
+    from .test_records_sealed import certificates
+
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    services.amend(store, people["rev2"], first.id, "customer's address misprinted")
+    assert services.approve(store, people["rev"], cal.id).status == "issuing"
+    assert backup.verify(store)[1] == []
+    table, column, value = REGISTER_EDITS[what]
+    was = {"instrument": "RLG-0001", "customer": "Example Navigation Co."}[what]
+    issued = len(certificates(store))
+    with store.writing() as s:
+        s.execute(text(f"UPDATE {table} SET {column} = :v"), {"v": value})
+        s.commit()
+    line = (f"{what} {value}: its {column} {value!r} is not the {was!r} its audit trail's "
+            "latest event recorded: the row was changed outside gonio")
+    assert line in backup.verify(store)[1]
+    monkeypatch.setattr(worker, "calibrate_folder", no_pipeline)
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    now = services.calibration(store, cal.id)
+    assert now.status == "failed" and line in now.error, now.error
+    assert "\n" not in now.error and len(certificates(store)) == issued
+
+
+def test_register_edits_through_the_records_verify(store, people, computed_folder,
+                                                    bench_readings, monkeypatch, tmp_path):
+    """The instrument's serial and the customer's name corrected through the records before
+    the amendment is asked for, the instrument retired and brought back, the customer
+    retired and brought back: the records verify (a backup is written) while the amendment
+    waits and once it is issued, and the amendment states the corrections."""
+    cal, std, first = issued_under(store, people, computed_folder, bench_readings, monkeypatch)
+    tech = people["tech"]
+    inst = services.update_instrument(store, tech, cal.instrument_id, serial="RLG-0001B")
+    services.update_customer(store, tech, inst.customer_id, name="Example Navigation Ltd")
+    for retire in (True, False):
+        services.update_instrument(store, tech, cal.instrument_id, retire=retire)
+        services.update_customer(store, tech, inst.customer_id, retire=retire)
+        assert backup.verify(store)[1] == []
+    services.amend(store, people["rev2"], first.id, "serial and name corrected")
+    services.approve(store, people["rev"], cal.id)
+    assert backup.verify(store)[1] == []
+    assert backup.backup(store, tmp_path / "waiting.zip")["calibrations"] == 1
+    page = services.file_bytes(store, run_issue(store, monkeypatch).html_sha256).decode()
+    assert "RLG-0001B" in page and "Example Navigation Ltd" in page
+    assert backup.verify(store)[1] == []
