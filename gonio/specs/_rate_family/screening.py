@@ -470,7 +470,7 @@ def zero_rate_line(df: pd.DataFrame) -> tuple[float, float, float] | None:
 
 
 def null_output_rule(df: pd.DataFrame, null_output: float | None, file=None,
-                     unit: str = "") -> None:
+                     unit: str = "", line=None) -> None:
     """Refuse a null output (``null_output``: the metadata's, else the protocol's number)
     that contradicts the zero-rate output the scale-factor test measures.
 
@@ -481,9 +481,10 @@ def null_output_rule(df: pd.DataFrame, null_output: float | None, file=None,
     record) takes (output − null_output)/K; a gyro's bias is a small part of the rates it is
     calibrated over (0.15 °/s of 100 °/s on the bench), so a null output leaving a bias
     beyond the largest rate tested is not a bias but a value in another unit or scale
-    (2.5 for 2500 mV: a bias of 416 °/s certified). Nothing is checked where the test
-    lacks two rates (then no item has a K either) or no null output is stated."""
-    line = zero_rate_line(df)
+    (2.5 where 2500 mV is meant would leave a bias of 416 °/s). Nothing is checked where the test
+    lacks two rates (then no item has a K either) or no null output is stated. ``line``:
+    :func:`zero_rate_line` of ``df`` where the caller fitted it already."""
+    line = zero_rate_line(df) if line is None else line
     if line is None or null_output is None:
         return
     k, f0, top = line
@@ -497,7 +498,7 @@ def null_output_rule(df: pd.DataFrame, null_output: float | None, file=None,
 
 
 def nominal_scale_factor_rule(df: pd.DataFrame, nominal: float | None, file=None,
-                              used_by: str | None = None) -> list[Finding]:
+                              used_by: str | None = None, line=None) -> list[Finding]:
     """A nominal scale factor (``nominal_scale_factor``: the metadata's, else the protocol's
     number) that departs from the K the scale-factor test measures (:func:`zero_rate_line`)
     by more than ``NOMINAL_SCALE_FACTOR_FACTOR`` either way, or has the other sign.
@@ -510,7 +511,7 @@ def nominal_scale_factor_rule(df: pd.DataFrame, nominal: float | None, file=None
     nominal by percent; a factor of ten or more is a nominal in another unit (V for mV,
     rad for degrees). ``[]`` where it agrees, where no nominal is stated, or where the test
     lacks two rates."""
-    line = zero_rate_line(df)
+    line = zero_rate_line(df) if line is None else line
     if line is None or nominal is None or nominal == 0:
         return []
     k = line[0]
@@ -544,10 +545,12 @@ def metadata_rules(readings, null_default, nominal_default, used_by: str | None 
             return None
         return metadata_number(md, key, default, path)
 
+    line = zero_rate_line(readings.data)         # one fit for both rules
     null_output_rule(readings.data, stated("null_output", null_default), file,
-                     str(md.get("output_unit", "") or "").strip())
+                     str(md.get("output_unit", "") or "").strip(), line=line)
     return nominal_scale_factor_rule(readings.data, stated("nominal_scale_factor",
-                                                           nominal_default), file, used_by)
+                                                           nominal_default), file, used_by,
+                                     line=line)
 
 
 def screen(readings, segments, clauses: dict) -> list[Finding]:

@@ -697,8 +697,8 @@ def table_mpe_plausible(readings_arcsec: float, protocol_arcsec: float, file=Non
     so a contradiction beyond the factor is refused, never stated beside a U it made: a
     table ten times worse than the one the programme (and the laboratory's list of
     standards, whose accuracy text the certificate prints) names is another table or
-    another unit (″ for ′ or µrad), and 100″ for 0.1″ made E's U 460″. A protocol MPE of 0
-    (a calibrated table's programme) sets no bound.
+    another unit (″ for ′ or µrad), and 100″ where 0.1″ is meant would make E's U 460″. A
+    protocol MPE of 0 (a calibrated table's programme) sets no bound.
 
     >>> table_mpe_plausible(0.2, 0.1)
     >>> table_mpe_plausible(100.0, 0.1)
